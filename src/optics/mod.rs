@@ -1,0 +1,5 @@
+//! CPU twins of the numbers the shaders compute. Each function here is what a shader does,
+//! written plainly so tests can hold the GPU to it.
+
+pub mod color;
+pub mod shading;

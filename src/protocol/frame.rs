@@ -1,0 +1,108 @@
+use serde::{Deserialize, Serialize};
+
+use super::Codec;
+
+/// Where the marker was drawn and the frame was centred: the gaze actually used, normalised.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct GazeUsed {
+    pub x: f64,
+    pub y: f64,
+}
+
+/// Milliseconds spent in each stage of one frame, measured on the server's monotonic clock.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize, Deserialize)]
+pub struct StageTimes {
+    /// From the gaze sample's arrival to the render thread picking the frame up.
+    pub queue: f64,
+    /// Recording and executing the GPU passes (until the GPU reports them done).
+    pub render: f64,
+    /// Copying the image to host memory.
+    pub readback: f64,
+    /// JPEG/PNG encoding.
+    pub encode: f64,
+}
+
+/// The JSON header in front of every frame's image bytes.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct FrameHeader {
+    /// Frame number within the session, from 1.
+    pub frame: u64,
+    /// The gaze sample this frame answers; `None` for the first frame, drawn before any sample.
+    pub seq: Option<u64>,
+    /// That sample's own `t_ms` (client clock), echoed for gaze-to-display latency.
+    pub t_ms: Option<f64>,
+    pub gaze: GazeUsed,
+    pub width: u32,
+    pub height: u32,
+    pub codec: Codec,
+    /// Fraction of pixels shaded this frame (1.0 without foveation).
+    pub sampled: f64,
+    pub stages_ms: StageTimes,
+}
+
+/// Packs `[u32 LE header length][JSON header][image bytes]`.
+pub fn encode_frame(header: &FrameHeader, image: &[u8]) -> Vec<u8> {
+    let json = serde_json::to_vec(header).unwrap_or_default();
+    let mut out = Vec::with_capacity(4 + json.len() + image.len());
+    out.extend_from_slice(&(json.len() as u32).to_le_bytes());
+    out.extend_from_slice(&json);
+    out.extend_from_slice(image);
+    out
+}
+
+#[derive(Debug, thiserror::Error)]
+pub enum FrameDecodeError {
+    #[error("frame message is {0} bytes, shorter than its 4-byte length prefix")]
+    Short(usize),
+    #[error("header length {len} runs past the end of a {total}-byte message")]
+    HeaderPastEnd { len: usize, total: usize },
+    #[error("frame header is not valid JSON: {0}")]
+    Json(#[from] serde_json::Error),
+}
+
+/// Splits a binary frame message into its header and image bytes.
+pub fn decode_frame(bytes: &[u8]) -> Result<(FrameHeader, &[u8]), FrameDecodeError> {
+    let prefix: [u8; 4] =
+        bytes.get(..4).and_then(|b| b.try_into().ok()).ok_or(FrameDecodeError::Short(bytes.len()))?;
+    let len = u32::from_le_bytes(prefix) as usize;
+    let end = 4usize.checked_add(len).filter(|&e| e <= bytes.len()).ok_or(
+        FrameDecodeError::HeaderPastEnd { len, total: bytes.len() },
+    )?;
+    let header = serde_json::from_slice(&bytes[4..end])?;
+    Ok((header, &bytes[end..]))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn frame_round_trips_header_and_image() {
+        let header = FrameHeader {
+            frame: 42,
+            seq: Some(17),
+            t_ms: Some(12399.1),
+            gaze: GazeUsed { x: 0.25, y: 0.75 },
+            width: 64,
+            height: 48,
+            codec: Codec::Png,
+            sampled: 1.0,
+            stages_ms: StageTimes { queue: 0.1, render: 2.0, readback: 0.5, encode: 1.25 },
+        };
+        let image = [0xFFu8, 0xD8, 0x01, 0x02];
+        let bytes = encode_frame(&header, &image);
+        let (back, rest) = decode_frame(&bytes).unwrap();
+        assert_eq!(back, header);
+        assert_eq!(rest, image);
+    }
+
+    #[test]
+    fn truncated_frames_are_errors_not_panics() {
+        assert!(matches!(decode_frame(&[1, 0]), Err(FrameDecodeError::Short(2))));
+        assert!(matches!(
+            decode_frame(&[200, 0, 0, 0, b'{']),
+            Err(FrameDecodeError::HeaderPastEnd { len: 200, total: 5 })
+        ));
+        assert!(matches!(decode_frame(&[1, 0, 0, 0, b'x']), Err(FrameDecodeError::Json(_))));
+    }
+}

@@ -1,0 +1,30 @@
+use serde::{Deserialize, Serialize};
+
+/// The limits a server enforces, sent to every client in `welcome` so nothing is a surprise.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Limits {
+    /// Longest text message handled with an `error` reply; longer ones are rejected unread.
+    pub max_message_bytes: usize,
+    /// Frames larger than this are refused at `hello` (both dimensions also have to be ≥ 1).
+    pub max_width: u32,
+    pub max_height: u32,
+    /// Upper bound for `hello.max_in_flight` (frames sent but not yet acknowledged).
+    pub max_in_flight: u32,
+    /// Valid pupil diameters in millimetres; physiological pupils are about 2–8 mm.
+    pub pupil_mm: [f64; 2],
+    /// Gaze coordinates are normalised to the frame, top-left origin, both in this closed range.
+    pub gaze: [f64; 2],
+}
+
+impl Default for Limits {
+    fn default() -> Self {
+        Self {
+            max_message_bytes: 4096,
+            max_width: 3840,
+            max_height: 2160,
+            max_in_flight: 8,
+            pupil_mm: [1.0, 10.0],
+            gaze: [0.0, 1.0],
+        }
+    }
+}

@@ -1,0 +1,169 @@
+use serde::{Deserialize, Serialize};
+
+use super::Limits;
+
+pub const PROTOCOL_VERSION: u32 = 1;
+
+/// Opens a session: what to render, how large, and how the client wants frames delivered.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Hello {
+    #[serde(default = "default_version")]
+    pub v: u32,
+    #[serde(default = "default_scene")]
+    pub scene: String,
+    #[serde(default = "default_width")]
+    pub width: u32,
+    #[serde(default = "default_height")]
+    pub height: u32,
+    #[serde(default = "default_preset")]
+    pub preset: String,
+    #[serde(default)]
+    pub display: Display,
+    #[serde(default)]
+    pub codec: Codec,
+    /// JPEG quality 1–100; ignored for PNG.
+    #[serde(default = "default_quality")]
+    pub quality: u8,
+    /// Frames the server may have sent that the client has not acknowledged yet.
+    #[serde(default = "default_in_flight")]
+    pub max_in_flight: u32,
+}
+
+impl Default for Hello {
+    fn default() -> Self {
+        Self {
+            v: PROTOCOL_VERSION,
+            scene: default_scene(),
+            width: default_width(),
+            height: default_height(),
+            preset: default_preset(),
+            display: Display::default(),
+            codec: Codec::default(),
+            quality: default_quality(),
+            max_in_flight: default_in_flight(),
+        }
+    }
+}
+
+fn default_version() -> u32 {
+    PROTOCOL_VERSION
+}
+fn default_scene() -> String {
+    crate::scene::DEFAULT_SCENE.to_string()
+}
+fn default_width() -> u32 {
+    640
+}
+fn default_height() -> u32 {
+    480
+}
+fn default_preset() -> String {
+    "full".to_string()
+}
+fn default_quality() -> u8 {
+    85
+}
+fn default_in_flight() -> u32 {
+    2
+}
+
+/// Physical display geometry: turns pixels into degrees of visual angle (design.md §5 defaults).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Display {
+    pub width_cm: f64,
+    pub distance_cm: f64,
+}
+
+impl Default for Display {
+    fn default() -> Self {
+        Self { width_cm: 53.0, distance_cm: 60.0 }
+    }
+}
+
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Codec {
+    #[default]
+    Jpeg,
+    /// Lossless, so frames can be compared exactly.
+    Png,
+}
+
+/// One eye-tracker sample. `t_ms` is on the client's own clock; the server echoes it so the
+/// client can compute gaze-to-display latency without synchronised clocks.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Gaze {
+    pub seq: u64,
+    pub t_ms: f64,
+    pub x: f64,
+    pub y: f64,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub pupil_mm: Option<f64>,
+}
+
+/// The client is done with a frame (shown, or dropped unseen): it returns one credit.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Ack {
+    pub frame: u64,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub t_ms: Option<f64>,
+    /// True when the client skipped the frame because a newer one was ready first.
+    #[serde(default)]
+    pub dropped: bool,
+}
+
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct SceneInfo {
+    pub name: String,
+    pub triangles: u32,
+}
+
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Welcome {
+    pub v: u32,
+    pub session: u64,
+    pub scene: SceneInfo,
+    pub scenes: Vec<String>,
+    pub presets: Vec<String>,
+    pub width: u32,
+    pub height: u32,
+    pub codec: Codec,
+    pub max_in_flight: u32,
+    pub limits: Limits,
+    /// The GPU adapter frames come from, e.g. "llvmpipe (LLVM 15.0.6, 256 bits) (Vulkan)".
+    pub adapter: String,
+}
+
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct ErrorMessage {
+    pub code: super::ErrorCode,
+    pub message: String,
+}
+
+/// Text messages from server to client.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "type", rename_all = "snake_case")]
+pub enum ServerMessage {
+    Welcome(Welcome),
+    Error(ErrorMessage),
+}
+
+impl ServerMessage {
+    pub fn to_json(&self) -> String {
+        // Serialising these plain structs cannot fail: no maps with non-string keys, no NaN
+        // (non-finite floats become null in serde_json).
+        serde_json::to_string(self).unwrap_or_else(|e| {
+            format!(r#"{{"type":"error","code":"render_failed","message":"serialise: {e}"}}"#)
+        })
+    }
+}
+
+impl From<super::ProtocolError> for ServerMessage {
+    fn from(e: super::ProtocolError) -> Self {
+        ServerMessage::Error(ErrorMessage { code: e.code, message: e.message })
+    }
+}

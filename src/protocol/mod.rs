@@ -1,0 +1,19 @@
+//! Wire protocol v1: JSON text messages both ways, frames as binary messages
+//! `[u32 LE header length][JSON header][image bytes]`.
+//!
+//! Everything here is plain data and validation so it can be tested without a socket or a GPU.
+
+mod error;
+mod frame;
+mod limits;
+mod messages;
+mod parse;
+
+pub use error::{ErrorCode, ProtocolError};
+pub use frame::{decode_frame, encode_frame, FrameHeader, GazeUsed, StageTimes};
+pub use limits::Limits;
+pub use messages::{
+    Ack, Codec, Display, ErrorMessage, Gaze, Hello, SceneInfo, ServerMessage, Welcome,
+    PROTOCOL_VERSION,
+};
+pub use parse::{parse_client_message, ClientMessage};

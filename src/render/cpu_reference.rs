@@ -1,0 +1,103 @@
+//! A CPU rasteriser for the forward pass: the same camera, the same Lambert shading
+//! (`optics::shading::lambert`), pixel centres sampled, perspective-correct normals. Slow and
+//! simple on purpose; tests hold the GPU image to it.
+
+use glam::{Vec3, Vec4, Vec4Swizzles};
+
+use crate::optics::color::{linear_to_srgb8, srgb8_to_linear};
+use crate::optics::shading::lambert;
+use crate::scene::Scene;
+
+/// The reference image: sRGB RGBA8 like the GPU's, plus which pixels the mesh covers.
+pub struct ReferenceImage {
+    pub width: u32,
+    pub height: u32,
+    pub rgba: Vec<u8>,
+    pub covered: Vec<bool>,
+}
+
+pub fn render_reference(scene: &Scene, width: u32, height: u32, to_light: Option<Vec3>) -> ReferenceImage {
+    let n = (width * height) as usize;
+    let mut depth = vec![f32::INFINITY; n];
+    let mut normal = vec![Vec3::ZERO; n];
+    let view_proj = scene.file.camera.view_proj(width, height);
+    let mesh = &scene.mesh;
+    let clip: Vec<Vec4> = mesh.positions.iter().map(|p| view_proj * p.extend(1.0)).collect();
+    let (wf, hf) = (width as f32, height as f32);
+    for tri in mesh.indices.chunks_exact(3) {
+        let idx = [tri[0], tri[1], tri[2]].map(|i| i as usize);
+        let c = idx.map(|i| clip[i]);
+        if c.iter().any(|v| v.w <= 1e-6) {
+            continue; // behind the eye; the shipped scenes keep meshes in front of the camera
+        }
+        // Window coordinates: x right, y down, pixel centres at +0.5.
+        let s = c.map(|v| {
+            let ndc = v.xyz() / v.w;
+            Vec3::new((ndc.x * 0.5 + 0.5) * wf, (0.5 - ndc.y * 0.5) * hf, ndc.z)
+        });
+        let area = edge(s[0], s[1], s[2]);
+        // Counter-clockwise in NDC is clockwise with y flipped: front faces have area < 0 here.
+        if area >= 0.0 {
+            continue;
+        }
+        let lo = s.iter().fold(Vec3::splat(f32::MAX), |a, v| a.min(*v));
+        let hi = s.iter().fold(Vec3::splat(f32::MIN), |a, v| a.max(*v));
+        let x0 = (lo.x - 0.5).ceil().max(0.0) as u32;
+        let y0 = (lo.y - 0.5).ceil().max(0.0) as u32;
+        let x1 = ((hi.x - 0.5).floor().min(wf - 1.0)).max(-1.0);
+        let y1 = ((hi.y - 0.5).floor().min(hf - 1.0)).max(-1.0);
+        if x1 < 0.0 || y1 < 0.0 {
+            continue;
+        }
+        for y in y0..=y1 as u32 {
+            for x in x0..=x1 as u32 {
+                let p = Vec3::new(x as f32 + 0.5, y as f32 + 0.5, 0.0);
+                let b = [edge(s[1], s[2], p) / area, edge(s[2], s[0], p) / area, edge(s[0], s[1], p) / area];
+                if b.iter().any(|&v| v < 0.0) {
+                    continue;
+                }
+                let z = b[0] * s[0].z + b[1] * s[1].z + b[2] * s[2].z;
+                let k = (y * width + x) as usize;
+                if z >= depth[k] || !(0.0..=1.0).contains(&z) {
+                    continue;
+                }
+                depth[k] = z;
+                // Perspective-correct: weight by 1/w, as the GPU interpolates varyings.
+                let pw = [b[0] / c[0].w, b[1] / c[1].w, b[2] / c[2].w];
+                let sum = pw[0] + pw[1] + pw[2];
+                normal[k] = (mesh.normals[idx[0]] * pw[0]
+                    + mesh.normals[idx[1]] * pw[1]
+                    + mesh.normals[idx[2]] * pw[2])
+                    / sum;
+            }
+        }
+    }
+    let light = &scene.file.light;
+    let to_light = to_light.and_then(|l| l.try_normalize()).unwrap_or(Vec3::from(light.to_light));
+    let background = scene.file.background_srgb;
+    let mut rgba = Vec::with_capacity(n * 4);
+    let mut covered = Vec::with_capacity(n);
+    for k in 0..n {
+        if depth[k].is_finite() {
+            let c = lambert(
+                normal[k],
+                to_light,
+                Vec3::from(scene.file.albedo),
+                Vec3::from(light.color) * light.intensity,
+                scene.file.ambient,
+            );
+            rgba.extend_from_slice(&[linear_to_srgb8(c.x), linear_to_srgb8(c.y), linear_to_srgb8(c.z), 255]);
+            covered.push(true);
+        } else {
+            // Round-trip so the reference background is exactly what an sRGB clear produces.
+            let bg = background.map(|b| linear_to_srgb8(srgb8_to_linear(b)));
+            rgba.extend_from_slice(&[bg[0], bg[1], bg[2], 255]);
+            covered.push(false);
+        }
+    }
+    ReferenceImage { width, height, rgba, covered }
+}
+
+fn edge(a: Vec3, b: Vec3, p: Vec3) -> f32 {
+    (b.x - a.x) * (p.y - a.y) - (b.y - a.y) * (p.x - a.x)
+}

@@ -1,0 +1,43 @@
+//! The headless renderer. [`Gpu`] picks an adapter and opens the device; [`Renderer`] owns the
+//! pipelines, per-scene GPU data and per-size targets and turns a [`FrameRequest`] into pixels;
+//! [`RenderThread`] runs a `Renderer` on its own thread so nothing async ever waits on the GPU.
+//!
+//! Passes, in frame order, one file each beside its shader in `shaders/`:
+//! [`pass::forward`] (lit mesh), [`pass::marker`] (gaze marker overlay).
+
+pub mod cpu_reference;
+mod device;
+pub mod pass;
+mod renderer;
+mod targets;
+mod thread;
+
+pub use device::Gpu;
+pub use renderer::{FrameRequest, RenderedFrame, Renderer};
+pub use thread::{RenderHandle, RenderThread, Rendered};
+
+/// Colour target format: sRGB so the GPU applies the transfer curve on write, and read-back
+/// bytes are display-ready for the encoders.
+pub const COLOR_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8UnormSrgb;
+pub const DEPTH_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Depth32Float;
+
+#[derive(Debug, thiserror::Error)]
+pub enum RenderError {
+    #[error(
+        "no GPU adapter found ({0}); on Debian/Ubuntu install the software Vulkan driver: \
+         apt-get install mesa-vulkan-drivers libvulkan1"
+    )]
+    NoAdapter(String),
+    #[error("could not open the GPU device on {adapter}: {source}")]
+    Device { adapter: String, source: wgpu::RequestDeviceError },
+    #[error(transparent)]
+    Scene(#[from] crate::scene::SceneError),
+    #[error("frame size {width}x{height} is not renderable (1 ..= {max} per side)")]
+    Size { width: u32, height: u32, max: u32 },
+    #[error("GPU error while rendering: {0}")]
+    Gpu(String),
+    #[error("reading the frame back from the GPU failed: {0}")]
+    Readback(String),
+    #[error("the render thread has stopped")]
+    ThreadGone,
+}

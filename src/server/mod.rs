@@ -1,0 +1,75 @@
+//! The HTTP + WebSocket server: `GET /` (the embedded web client), `GET /ws` (one session per
+//! socket), `GET /healthz`. `run` takes its listener and shutdown signal as arguments so tests
+//! can bind 127.0.0.1:0 and stop it when they are done.
+
+mod app;
+mod assets;
+mod session;
+
+use std::sync::atomic::AtomicU64;
+use std::sync::Arc;
+use std::time::Duration;
+
+use tokio::net::TcpListener;
+use tokio_util::sync::CancellationToken;
+use tokio_util::task::TaskTracker;
+
+use crate::protocol::{Limits, SceneInfo};
+use crate::render::RenderHandle;
+
+pub use app::router;
+
+/// Presets a session may ask for. Foveated presets arrive with the foveation work.
+pub const PRESETS: &[&str] = &["full"];
+
+/// Hard cap on one WebSocket message; above `Limits::max_message_bytes` messages still get a
+/// polite `too_large` error, above this the transport closes the socket (code 1009).
+pub const HARD_MESSAGE_LIMIT: usize = 64 * 1024;
+
+/// How long sessions get to say goodbye (close frame 1001) after shutdown starts.
+const DRAIN: Duration = Duration::from_secs(2);
+
+/// State shared by every request handler and session.
+pub struct ServerState {
+    /// The only way to the GPU: a queue into the render thread.
+    pub render: RenderHandle,
+    /// Enforced per message and announced in `welcome`.
+    pub limits: Limits,
+    /// Scenes a `hello` may name, with their sizes for `welcome`.
+    pub scenes: Vec<SceneInfo>,
+    /// Session ids, unique for the server's life (logs and `welcome`).
+    pub next_session: AtomicU64,
+    /// Cancelled once on shutdown; every session watches it and closes its socket.
+    pub shutdown: CancellationToken,
+    /// Counts live sessions so shutdown can wait for their close frames.
+    pub sessions: TaskTracker,
+}
+
+/// Serves until `shutdown` is cancelled, then closes every session with 1001 and returns.
+pub async fn run(listener: TcpListener, render: RenderHandle, shutdown: CancellationToken) -> std::io::Result<()> {
+    let scenes = crate::scene::builtin_names()
+        .into_iter()
+        .filter_map(|name| match crate::scene::Scene::builtin(&name) {
+            Ok(s) => Some(SceneInfo { name, triangles: s.mesh.triangle_count() }),
+            Err(e) => {
+                tracing::error!("built-in scene {name} does not load: {e}");
+                None
+            }
+        })
+        .collect();
+    let state = Arc::new(ServerState {
+        render,
+        limits: Limits::default(),
+        scenes,
+        next_session: AtomicU64::new(1),
+        shutdown: shutdown.clone(),
+        sessions: TaskTracker::new(),
+    });
+    let app = router(state.clone());
+    axum::serve(listener, app).with_graceful_shutdown(shutdown.cancelled_owned()).await?;
+    state.sessions.close();
+    if tokio::time::timeout(DRAIN, state.sessions.wait()).await.is_err() {
+        tracing::warn!("some sessions did not close within {DRAIN:?}");
+    }
+    Ok(())
+}

@@ -1,0 +1,271 @@
+//! One WebSocket session: `hello` → `welcome`, then gaze in and frames out, paced by credits.
+//!
+//! Only the newest gaze sample matters: samples that arrive while a frame is being made are
+//! coalesced into the next one, never queued. A frame is made when there is something new to
+//! show and the client has a free credit (`max_in_flight` minus frames not yet acknowledged),
+//! so a slow client simply gets fewer frames.
+
+use std::collections::BTreeSet;
+use std::future::Future;
+use std::pin::Pin;
+use std::sync::Arc;
+use std::time::Instant;
+
+use axum::extract::ws::{CloseFrame, Message, WebSocket};
+use futures_util::{SinkExt, StreamExt};
+
+use super::{ServerState, PRESETS};
+use crate::encode;
+use crate::protocol::{
+    encode_frame, parse_client_message, ClientMessage, ErrorCode, FrameHeader, Gaze, GazeUsed,
+    Hello, ProtocolError, ServerMessage, StageTimes, Welcome, PROTOCOL_VERSION,
+};
+use crate::render::FrameRequest;
+
+/// A frame being made: everything needed to render it and to write its header.
+struct FrameJob {
+    frame: u64,
+    gaze: Option<Gaze>,
+    /// When the gaze sample (or the hello, for the first frame) arrived.
+    arrived: Instant,
+    request: FrameRequest,
+    hello: Hello,
+}
+
+type Making = Pin<Box<dyn Future<Output = Result<Vec<u8>, ProtocolError>> + Send>>;
+
+#[derive(Default)]
+struct Session {
+    hello: Option<Hello>,
+    /// Newest gaze sample not yet rendered, with its arrival time.
+    latest: Option<(Gaze, Instant)>,
+    /// The last sample rendered (kept so a new frame can be made without a new sample).
+    shown: Option<Gaze>,
+    /// Something changed since the last frame started (a new sample, or the session began).
+    dirty: bool,
+    hello_at: Option<Instant>,
+    frames_made: u64,
+    /// Frames sent (or being made) and not yet acknowledged: each holds one credit.
+    unacked: BTreeSet<u64>,
+    samples: u64,
+    coalesced: u64,
+}
+
+pub async fn run(socket: WebSocket, state: Arc<ServerState>, id: u64) {
+    tracing::info!(session = id, "session opened");
+    let (mut tx, mut rx) = socket.split();
+    let mut s = Session::default();
+    let mut making: Option<Making> = None;
+    let mut sent = 0u64;
+    let close = loop {
+        if making.is_none() {
+            if let Some(job) = s.next_job() {
+                making = Some(Box::pin(make_frame(state.clone(), job)));
+            }
+        }
+        let mut replies: Vec<Message> = Vec::new();
+        tokio::select! {
+            _ = state.shutdown.cancelled() => {
+                break Some(CloseFrame { code: 1001, reason: "server shutting down".into() });
+            }
+            msg = rx.next() => match msg {
+                None => break None,
+                Some(Err(e)) => {
+                    tracing::debug!(session = id, "socket error: {e}");
+                    break None;
+                }
+                Some(Ok(Message::Close(_))) => break None,
+                Some(Ok(Message::Text(text))) => {
+                    if let Some(reply) = s.on_text(text.as_str(), &state, id) {
+                        replies.push(Message::Text(reply.to_json().into()));
+                    }
+                }
+                Some(Ok(Message::Binary(_))) => {
+                    let e = ProtocolError::new(ErrorCode::UnexpectedBinary, "clients send JSON text messages only");
+                    replies.push(Message::Text(ServerMessage::from(e).to_json().into()));
+                }
+                Some(Ok(Message::Ping(_) | Message::Pong(_))) => {}
+            },
+            made = async { making.as_mut().expect("guarded by the select condition").await }, if making.is_some() => {
+                making = None;
+                match made {
+                    Ok(bytes) => {
+                        sent += 1;
+                        replies.push(Message::Binary(bytes.into()));
+                    }
+                    Err(e) => {
+                        // The frame is gone: give its credit back so the session does not stall.
+                        if let Some(last) = s.unacked.last().copied() {
+                            s.unacked.remove(&last);
+                        }
+                        tracing::warn!(session = id, "frame failed: {}", e.message);
+                        replies.push(Message::Text(ServerMessage::from(e).to_json().into()));
+                    }
+                }
+            }
+        }
+        for reply in replies {
+            if tx.send(reply).await.is_err() {
+                tracing::debug!(session = id, "client went away while we were sending");
+                return;
+            }
+        }
+    };
+    if let Some(frame) = close {
+        let _ = tx.send(Message::Close(Some(frame))).await;
+    }
+    tracing::info!(
+        session = id,
+        frames = sent,
+        samples = s.samples,
+        coalesced = s.coalesced,
+        "session closed"
+    );
+}
+
+impl Session {
+    /// Handles one text message; returns the reply to send, if any.
+    fn on_text(&mut self, text: &str, state: &ServerState, id: u64) -> Option<ServerMessage> {
+        let msg = match parse_client_message(text, &state.limits) {
+            Ok(m) => m,
+            Err(e) => {
+                tracing::debug!(session = id, code = ?e.code, "bad message: {}", e.message);
+                return Some(e.into());
+            }
+        };
+        match msg {
+            ClientMessage::Hello(hello) => Some(self.on_hello(hello, state, id)),
+            ClientMessage::Gaze(gaze) => {
+                if self.hello.is_none() {
+                    return Some(no_hello("gaze"));
+                }
+                self.samples += 1;
+                if self.latest.is_some() {
+                    self.coalesced += 1;
+                }
+                self.latest = Some((gaze, Instant::now()));
+                self.dirty = true;
+                None
+            }
+            ClientMessage::Ack(ack) => {
+                if self.hello.is_none() {
+                    return Some(no_hello("ack"));
+                }
+                if self.unacked.remove(&ack.frame) {
+                    None
+                } else {
+                    Some(
+                        ProtocolError::new(
+                            ErrorCode::BadAck,
+                            format!("frame {} is not awaiting an ack (sent so far: {})", ack.frame, self.frames_made),
+                        )
+                        .into(),
+                    )
+                }
+            }
+        }
+    }
+
+    fn on_hello(&mut self, hello: Hello, state: &ServerState, id: u64) -> ServerMessage {
+        if self.hello.is_some() {
+            return ProtocolError::new(ErrorCode::AlreadyStarted, "this session already said hello; open a new socket to start over").into();
+        }
+        let Some(scene) = state.scenes.iter().find(|s| s.name == hello.scene) else {
+            let names: Vec<&str> = state.scenes.iter().map(|s| s.name.as_str()).collect();
+            return ProtocolError::new(
+                ErrorCode::UnknownScene,
+                format!("unknown scene {:?}; available: {}", hello.scene, names.join(", ")),
+            )
+            .into();
+        };
+        if !PRESETS.contains(&hello.preset.as_str()) {
+            return ProtocolError::new(
+                ErrorCode::UnknownPreset,
+                format!("unknown preset {:?}; available: {}", hello.preset, PRESETS.join(", ")),
+            )
+            .into();
+        }
+        tracing::info!(session = id, scene = %hello.scene, w = hello.width, h = hello.height, codec = ?hello.codec, "session started");
+        let welcome = Welcome {
+            v: PROTOCOL_VERSION,
+            session: id,
+            scene: scene.clone(),
+            scenes: state.scenes.iter().map(|s| s.name.clone()).collect(),
+            presets: PRESETS.iter().map(|p| p.to_string()).collect(),
+            width: hello.width,
+            height: hello.height,
+            codec: hello.codec,
+            max_in_flight: hello.max_in_flight,
+            limits: state.limits.clone(),
+            adapter: state.render.adapter().to_string(),
+        };
+        self.hello = Some(hello);
+        self.hello_at = Some(Instant::now());
+        self.dirty = true; // the first frame shows the scene before any gaze arrives
+        ServerMessage::Welcome(welcome)
+    }
+
+    /// The next frame to make, if there is something new and a credit to spend on it.
+    fn next_job(&mut self) -> Option<FrameJob> {
+        let hello = self.hello.as_ref()?;
+        if !self.dirty || self.unacked.len() >= hello.max_in_flight as usize {
+            return None;
+        }
+        let (gaze, arrived) = match self.latest.take() {
+            Some((g, at)) => (Some(g), at),
+            None => (self.shown, self.hello_at.unwrap_or_else(Instant::now)),
+        };
+        self.shown = gaze;
+        self.dirty = false;
+        self.frames_made += 1;
+        self.unacked.insert(self.frames_made);
+        let xy = gaze.map(|g| [g.x as f32, g.y as f32]).unwrap_or([0.5, 0.5]);
+        let mut request = FrameRequest::new(&hello.scene, hello.width, hello.height);
+        request.gaze = Some(xy);
+        Some(FrameJob { frame: self.frames_made, gaze, arrived, request, hello: hello.clone() })
+    }
+}
+
+fn no_hello(what: &str) -> ServerMessage {
+    ProtocolError::new(ErrorCode::NoHello, format!("send hello before {what}")).into()
+}
+
+/// Renders on the render thread, encodes on the blocking pool, and packs the binary message.
+async fn make_frame(state: Arc<ServerState>, job: FrameJob) -> Result<Vec<u8>, ProtocolError> {
+    let failed = |what: &str, e: &dyn std::fmt::Display| {
+        ProtocolError::new(ErrorCode::RenderFailed, format!("frame {}: {what}: {e}", job.frame))
+    };
+    let before_queue = Instant::now();
+    let rendered = state.render.render(job.request.clone()).await.map_err(|e| failed("render", &e))?;
+    let queue = (before_queue - job.arrived).as_secs_f64() * 1e3 + rendered.queue_ms;
+    let frame = rendered.frame;
+    let (codec, quality) = (job.hello.codec, job.hello.quality);
+    let (w, h) = (frame.width, frame.height);
+    let (render_ms, readback_ms) = (frame.render_ms, frame.readback_ms);
+    let rgba = frame.rgba;
+    let encoded = tokio::task::spawn_blocking(move || {
+        let started = Instant::now();
+        encode::encode(&rgba, w, h, codec, quality).map(|bytes| (bytes, started.elapsed()))
+    })
+    .await
+    .map_err(|e| failed("encoder task", &e))?;
+    let (image, encode_time) = encoded.map_err(|e| failed("encode", &e))?;
+    let [x, y] = job.request.gaze.unwrap_or([0.5, 0.5]);
+    let header = FrameHeader {
+        frame: job.frame,
+        seq: job.gaze.map(|g| g.seq),
+        t_ms: job.gaze.map(|g| g.t_ms),
+        gaze: GazeUsed { x: f64::from(x), y: f64::from(y) },
+        width: w,
+        height: h,
+        codec,
+        sampled: 1.0,
+        stages_ms: StageTimes {
+            queue,
+            render: render_ms,
+            readback: readback_ms,
+            encode: encode_time.as_secs_f64() * 1e3,
+        },
+    };
+    Ok(encode_frame(&header, &image))
+}
