@@ -42,7 +42,8 @@ pub struct Client {
 
 impl Client {
     pub async fn connect(url: &str) -> Result<Client, ClientError> {
-        let (ws, _) = tokio_tungstenite::connect_async(url)
+        // No Nagle: gaze samples and acks are tiny and must leave at once.
+        let (ws, _) = tokio_tungstenite::connect_async_with_config(url, None, true)
             .await
             .map_err(|e| ClientError::Connect { url: url.to_string(), source: Box::new(e) })?;
         Ok(Client { ws })

@@ -66,6 +66,13 @@ pub async fn run(listener: TcpListener, render: RenderHandle, shutdown: Cancella
         sessions: TaskTracker::new(),
     });
     let app = router(state.clone());
+    // Frames and gaze samples are small and latency-bound: Nagle's algorithm would hold them
+    // back for tens of milliseconds waiting for delayed ACKs.
+    let listener = axum::serve::ListenerExt::tap_io(listener, |tcp| {
+        if let Err(e) = tcp.set_nodelay(true) {
+            tracing::warn!("cannot set TCP_NODELAY: {e}");
+        }
+    });
     axum::serve(listener, app).with_graceful_shutdown(shutdown.cancelled_owned()).await?;
     state.sessions.close();
     if tokio::time::timeout(DRAIN, state.sessions.wait()).await.is_err() {
