@@ -13,6 +13,7 @@
 
 pub mod client;
 pub mod encode;
+pub mod foveation;
 pub mod optics;
 pub mod protocol;
 pub mod render;

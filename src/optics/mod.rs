@@ -3,3 +3,4 @@
 
 pub mod color;
 pub mod shading;
+pub mod acuity;

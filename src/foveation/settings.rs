@@ -1,0 +1,163 @@
+//! Quality knobs, travelling as one struct from a preset, the protocol's `settings` message or
+//! `fovea render` flags into the frame's uniforms.
+
+use serde::{Deserialize, Serialize};
+
+use crate::optics::acuity::ProbabilityForm;
+
+/// How a pixel's sampling probability becomes a yes/no.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Noise {
+    /// Against the WSE blue-noise rank map: every density is a well-spread subset.
+    Blue,
+    /// Against a per-pixel hash: clumps and holes, kept for comparison.
+    White,
+}
+
+/// How unshaded pixels are filled.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Reconstruction {
+    /// The nearest shaded sample's colour (Voronoi cells from jump flooding).
+    Nearest,
+    /// Windowed approximate Sibson natural-neighbour interpolation over the JFA result.
+    Sibson,
+}
+
+/// Foveated sampling knobs (thesis eqs. 2–4). With `enabled: false` every pixel is shaded.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Foveation {
+    pub enabled: bool,
+    /// MAR slope m, degrees of MAR per degree of eccentricity.
+    pub mar_slope: f32,
+    /// MAR at the fovea w0, degrees.
+    pub mar_w0_deg: f32,
+    /// Minimum sampling probability ξ: bounds the largest hole reconstruction must fill.
+    pub min_probability: f32,
+    pub probability: ProbabilityForm,
+    /// Raise the probability at albedo and normal edges (3×3 Sobel, albedo in CIE-Lab).
+    pub saliency: bool,
+    /// Raise the probability where the image moves.
+    pub motion: bool,
+    pub noise: Noise,
+    /// Reuse last frame's colour where the eq. 4 depth test passes.
+    pub reprojection: bool,
+    /// Frames a reused colour may age before the pixel counts as a miss.
+    pub max_history_age: u32,
+    pub reconstruction: Reconstruction,
+    /// Largest Sibson window half-size in pixels; 0 derives it from ξ as ⌈1/√ξ⌉ (one
+    /// guaranteed sample per window), capped at 16.
+    pub sibson_window: u32,
+    /// Shade a dense list of the sampled pixels (stream compaction) instead of masking a
+    /// full-frame dispatch.
+    pub compaction: bool,
+}
+
+impl Foveation {
+    pub const OFF: Foveation = Foveation {
+        enabled: false,
+        mar_slope: 0.022,
+        mar_w0_deg: 1.0 / 48.0,
+        min_probability: 0.05,
+        probability: ProbabilityForm::Density,
+        saliency: true,
+        motion: true,
+        noise: Noise::Blue,
+        reprojection: true,
+        max_history_age: 8,
+        reconstruction: Reconstruction::Sibson,
+        sibson_window: 0,
+        compaction: true,
+    };
+
+    /// The Sibson window bound actually used.
+    pub fn sibson_max_window(&self) -> u32 {
+        if self.sibson_window > 0 {
+            return self.sibson_window.min(32);
+        }
+        let xi = self.min_probability.max(1.0 / 256.0);
+        ((1.0 / xi.sqrt()).ceil() as u32).clamp(1, 16)
+    }
+}
+
+/// Overlays drawn over the frame for people looking at how it was made.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Overlay {
+    #[default]
+    None,
+    /// Shaded pixels green, reused (reprojected) pixels blue, reconstructed ones as they are.
+    Samples,
+    /// The sampling probability as a heat map.
+    Probability,
+}
+
+/// Everything a session can tune.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Settings {
+    pub preset: String,
+    pub foveation: Foveation,
+    /// Blur the frame by the eye's depth of field for the current pupil and gaze depth.
+    pub dof: bool,
+    pub overlay: Overlay,
+}
+
+/// Named presets, cheapest last. `full` shades every pixel with the frame's shading; `reference`
+/// shades every pixel with the most accurate shading (the ground truth errors are measured
+/// against).
+pub const PRESETS: &[&str] = &["reference", "full", "quality", "balanced", "fast"];
+
+impl Settings {
+    pub fn preset(name: &str) -> Option<Settings> {
+        let on = Foveation { enabled: true, ..Foveation::OFF };
+        let foveation = match name {
+            "reference" | "full" => Foveation::OFF,
+            "quality" => Foveation {
+                probability: ProbabilityForm::Linear,
+                min_probability: 0.1,
+                ..on
+            },
+            "balanced" => Foveation { min_probability: 0.05, ..on },
+            "fast" => Foveation {
+                mar_slope: 0.034,
+                min_probability: 0.02,
+                reconstruction: Reconstruction::Nearest,
+                ..on
+            },
+            _ => return None,
+        };
+        Some(Settings { preset: name.to_string(), foveation, dof: false, overlay: Overlay::None })
+    }
+}
+
+impl Default for Settings {
+    fn default() -> Self {
+        Settings::preset("full").expect("full is a preset")
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn every_listed_preset_exists_and_only_those() {
+        for p in PRESETS {
+            assert_eq!(Settings::preset(p).unwrap().preset, *p);
+        }
+        assert!(Settings::preset("ultra").is_none());
+        assert!(!Settings::preset("full").unwrap().foveation.enabled);
+        assert!(Settings::preset("fast").unwrap().foveation.enabled);
+    }
+
+    #[test]
+    fn sibson_window_follows_xi_and_stays_bounded() {
+        let w = |xi: f32| Foveation { min_probability: xi, ..Foveation::OFF }.sibson_max_window();
+        assert_eq!(w(1.0), 1);
+        assert_eq!(w(0.25), 2);
+        assert_eq!(w(0.05), 5);
+        assert_eq!(w(0.0), 16, "ξ = 0 does not make the window unbounded");
+    }
+}
