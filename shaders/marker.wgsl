@@ -28,7 +28,8 @@ fn fs_main(@builtin(position) p: vec4<f32>) -> @location(0) vec4<f32> {
     let half_t = 0.5 * c.w;
     let fill = max(band(abs(d - c.z), half_t), band(d, 0.6 * c.w));
     let outline = max(band(abs(d - c.z), half_t + 1.5), band(d, 0.6 * c.w + 1.5));
-    let magenta = vec3<f32>(1.0, 0.05, 0.6);
+    // The target holds sRGB-encoded bytes already: this is the encoded colour.
+    let magenta = vec3<f32>(1.0, 0.25, 0.8);
     let alpha = max(0.85 * outline, fill);
     return vec4<f32>(magenta * fill, alpha);
 }

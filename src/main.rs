@@ -30,6 +30,10 @@ enum Command {
         addr: SocketAddr,
     },
     /// Render one frame to an image file, without a server.
+    ///
+    /// Quality knobs start from --preset; any knob flag then overrides that one knob. With
+    /// --frames N the same gaze is rendered N times as one stream (so reprojection has history)
+    /// and the last frame is written.
     Render {
         /// Scene to render (built-in: bunny).
         #[arg(long, default_value = fovea::scene::DEFAULT_SCENE)]
@@ -38,7 +42,7 @@ enum Command {
         width: u32,
         #[arg(long, default_value_t = 480)]
         height: u32,
-        /// Gaze as X,Y in [0,1], top-left origin; the marker is drawn there.
+        /// Gaze as X,Y in [0,1], top-left origin; foveation centres here and the marker is drawn here.
         #[arg(long, value_parser = parse_gaze, default_value = "0.5,0.5")]
         gaze: [f32; 2],
         /// Leave out the gaze marker.
@@ -53,7 +57,97 @@ enum Command {
         /// JPEG quality 1–100.
         #[arg(long, default_value_t = 90, value_parser = clap::value_parser!(u8).range(1..=100))]
         quality: u8,
+        /// Quality preset: reference, full, quality, balanced, fast.
+        #[arg(long, default_value = "full")]
+        preset: String,
+        /// Frames to render before writing the last one.
+        #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..=10000))]
+        frames: u32,
+        /// Pupil diameter in mm (1–10); sets the depth of field.
+        #[arg(long, default_value_t = fovea::render::DEFAULT_PUPIL_MM)]
+        pupil_mm: f32,
+        /// Physical width of the displayed frame, cm.
+        #[arg(long, default_value_t = 53.0)]
+        display_width_cm: f64,
+        /// Viewing distance, cm.
+        #[arg(long, default_value_t = 60.0)]
+        distance_cm: f64,
+        #[command(flatten)]
+        knobs: Knobs,
     },
+}
+
+/// Single-knob overrides, the same names as the protocol's `settings` message.
+#[derive(clap::Args)]
+struct Knobs {
+    /// Foveated sampling on or off.
+    #[arg(long)]
+    foveation: Option<bool>,
+    /// MAR slope m (degrees per degree of eccentricity).
+    #[arg(long)]
+    mar_slope: Option<f64>,
+    /// MAR at the fovea w0, degrees.
+    #[arg(long)]
+    mar_w0_deg: Option<f64>,
+    /// Minimum sampling probability ξ in [0, 1].
+    #[arg(long)]
+    min_probability: Option<f64>,
+    /// Probability form: linear (thesis eq. 2) or density ((w_min/w)²).
+    #[arg(long, value_parser = parse_enum::<fovea::optics::acuity::ProbabilityForm>)]
+    probability: Option<fovea::optics::acuity::ProbabilityForm>,
+    #[arg(long)]
+    saliency: Option<bool>,
+    #[arg(long)]
+    motion: Option<bool>,
+    /// blue (WSE rank map) or white.
+    #[arg(long, value_parser = parse_enum::<fovea::foveation::Noise>)]
+    noise: Option<fovea::foveation::Noise>,
+    #[arg(long)]
+    reprojection: Option<bool>,
+    #[arg(long)]
+    max_history_age: Option<u32>,
+    /// nearest or sibson.
+    #[arg(long, value_parser = parse_enum::<fovea::foveation::Reconstruction>)]
+    reconstruction: Option<fovea::foveation::Reconstruction>,
+    /// Sibson window bound in pixels (0: from ξ).
+    #[arg(long)]
+    sibson_window: Option<u32>,
+    #[arg(long)]
+    compaction: Option<bool>,
+    /// Blur by the eye's depth of field.
+    #[arg(long)]
+    dof: Option<bool>,
+    /// none, samples or probability.
+    #[arg(long, value_parser = parse_enum::<fovea::foveation::settings::Overlay>)]
+    overlay: Option<fovea::foveation::settings::Overlay>,
+}
+
+impl Knobs {
+    fn patch(&self) -> fovea::protocol::SettingsPatch {
+        fovea::protocol::SettingsPatch {
+            preset: None,
+            foveation: self.foveation,
+            mar_slope: self.mar_slope,
+            mar_w0_deg: self.mar_w0_deg,
+            min_probability: self.min_probability,
+            probability: self.probability,
+            saliency: self.saliency,
+            motion: self.motion,
+            noise: self.noise,
+            reprojection: self.reprojection,
+            max_history_age: self.max_history_age,
+            reconstruction: self.reconstruction,
+            sibson_window: self.sibson_window,
+            compaction: self.compaction,
+            dof: self.dof,
+            overlay: self.overlay,
+        }
+    }
+}
+
+/// Parses a snake_case name of any of our serde enums.
+fn parse_enum<T: serde::de::DeserializeOwned>(s: &str) -> Result<T, String> {
+    serde_json::from_value(serde_json::Value::String(s.to_string())).map_err(|e| format!("{s:?}: {e}"))
 }
 
 fn parse_gaze(s: &str) -> Result<[f32; 2], String> {
@@ -84,11 +178,42 @@ fn main() -> Result<()> {
         .init();
     match Cli::parse().command {
         Command::Serve { addr } => serve(addr),
-        Command::Render { scene, width, height, gaze, no_marker, light, out, quality } => {
+        Command::Render {
+            scene,
+            width,
+            height,
+            gaze,
+            no_marker,
+            light,
+            out,
+            quality,
+            preset,
+            frames,
+            pupil_mm,
+            display_width_cm,
+            distance_cm,
+            knobs,
+        } => {
+            let mut settings = fovea::foveation::Settings::preset(&preset)
+                .with_context(|| format!("unknown preset {preset:?}; available: {}", fovea::foveation::PRESETS.join(", ")))?;
+            let patch = knobs.patch();
+            let limits = fovea::protocol::Limits::default();
+            // The same validation a `settings` message gets.
+            let mut msg = serde_json::to_value(&patch)?;
+            msg["type"] = "settings".into();
+            fovea::protocol::parse_client_message(&msg.to_string(), &limits).map_err(|e| anyhow::anyhow!("{}", e.message))?;
+            if !(limits.pupil_mm[0]..=limits.pupil_mm[1]).contains(&f64::from(pupil_mm)) {
+                bail!("--pupil-mm {pupil_mm} is outside [{}, {}]", limits.pupil_mm[0], limits.pupil_mm[1]);
+            }
+            settings.apply(&patch).map_err(|p| anyhow::anyhow!("unknown preset {p}"))?;
             let mut request = FrameRequest::new(&scene, width, height);
-            request.gaze = (!no_marker).then_some(gaze);
+            request.gaze = gaze;
+            request.marker = !no_marker;
             request.to_light = light;
-            render(request, &out, quality)
+            request.settings = settings;
+            request.pupil_mm = pupil_mm;
+            request.display = fovea::protocol::Display { width_cm: display_width_cm, distance_cm };
+            render(request, &out, quality, frames)
         }
     }
 }
@@ -137,7 +262,7 @@ async fn stop_on_signal(shutdown: CancellationToken) {
     shutdown.cancel();
 }
 
-fn render(request: FrameRequest, out: &std::path::Path, quality: u8) -> Result<()> {
+fn render(request: FrameRequest, out: &std::path::Path, quality: u8, frames: u32) -> Result<()> {
     let ext = out.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase);
     let codec = match ext.as_deref() {
         Some("png") => Codec::Png,
@@ -146,17 +271,22 @@ fn render(request: FrameRequest, out: &std::path::Path, quality: u8) -> Result<(
     };
     let mut renderer = Renderer::new().context("opening the GPU")?;
     eprintln!("adapter: {}", renderer.adapter());
-    let frame = renderer.render(&request).with_context(|| format!("rendering scene {:?}", request.scene))?;
+    let mut frame = renderer.render(&request).with_context(|| format!("rendering scene {:?}", request.scene))?;
+    for _ in 1..frames {
+        frame = renderer.render(&request).with_context(|| format!("rendering scene {:?}", request.scene))?;
+    }
     let started = std::time::Instant::now();
     let bytes = fovea::encode::encode(&frame.rgba, frame.width, frame.height, codec, quality)?;
     let encode_ms = started.elapsed().as_secs_f64() * 1e3;
     std::fs::write(out, &bytes).with_context(|| format!("writing {}", out.display()))?;
     eprintln!(
-        "wrote {} ({}x{}, {} bytes): render {:.2} ms, readback {:.2} ms, encode {:.2} ms",
+        "wrote {} ({}x{}, {} bytes, preset {}, sampled {:.1}%): render {:.2} ms, readback {:.2} ms, encode {:.2} ms",
         out.display(),
         frame.width,
         frame.height,
         bytes.len(),
+        request.settings.preset,
+        frame.sampled * 100.0,
         frame.render_ms,
         frame.readback_ms,
         encode_ms

@@ -119,7 +119,8 @@ fn marker_is_drawn_where_the_gaze_is() {
     let mut r = renderer();
     for gaze in [[0.25f32, 0.3f32], [0.8, 0.7], [0.5, 0.5]] {
         let mut req = FrameRequest::new("bunny", w, h);
-        req.gaze = Some(gaze);
+        req.gaze = gaze;
+        req.marker = true;
         let img = r.render(&req).unwrap().rgba;
         let (mut sx, mut sy, mut n) = (0.0, 0.0, 0.0);
         for (k, p) in img.chunks_exact(4).enumerate() {
@@ -142,7 +143,8 @@ fn tiny_odd_and_non_power_of_two_sizes_render() {
     let mut r = renderer();
     for (w, h) in [(1, 1), (97, 31), (3, 200), (641, 479)] {
         let mut req = FrameRequest::new("bunny", w, h);
-        req.gaze = Some([1.0, 0.0]);
+        req.gaze = [1.0, 0.0];
+        req.marker = true;
         let f = r.render(&req).unwrap_or_else(|e| panic!("{w}x{h}: {e}"));
         assert_eq!(f.rgba.len(), (w * h * 4) as usize, "{w}x{h}");
     }

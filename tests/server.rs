@@ -191,7 +191,8 @@ async fn png_frames_are_exactly_the_rendered_pixels() {
     assert_eq!(h.codec, Codec::Png);
     let streamed = image::load_from_memory(&png).unwrap().to_rgba8().into_raw();
     let mut req = FrameRequest::new("bunny", 72, 40);
-    req.gaze = Some([0.25, 0.75]);
+    req.gaze = [0.25, 0.75];
+    req.marker = true;
     let direct = Renderer::new().unwrap().render(&req).unwrap().rgba;
     assert!(streamed == direct, "PNG frame differs from a direct render of the same request");
     server.stop().await;

@@ -132,6 +132,68 @@ impl Settings {
     }
 }
 
+impl Settings {
+    /// Applies a protocol `settings` message: the preset first (if any), then single knobs.
+    /// Returns the preset name back as an error if it does not exist.
+    pub fn apply(&mut self, patch: &crate::protocol::SettingsPatch) -> Result<(), String> {
+        if let Some(name) = &patch.preset {
+            *self = Settings::preset(name).ok_or_else(|| name.clone())?;
+        }
+        let before = self.foveation;
+        let f = &mut self.foveation;
+        if let Some(v) = patch.foveation {
+            f.enabled = v;
+        }
+        if let Some(v) = patch.mar_slope {
+            f.mar_slope = v as f32;
+        }
+        if let Some(v) = patch.mar_w0_deg {
+            f.mar_w0_deg = v as f32;
+        }
+        if let Some(v) = patch.min_probability {
+            f.min_probability = v as f32;
+        }
+        if let Some(v) = patch.probability {
+            f.probability = v;
+        }
+        if let Some(v) = patch.saliency {
+            f.saliency = v;
+        }
+        if let Some(v) = patch.motion {
+            f.motion = v;
+        }
+        if let Some(v) = patch.noise {
+            f.noise = v;
+        }
+        if let Some(v) = patch.reprojection {
+            f.reprojection = v;
+        }
+        if let Some(v) = patch.max_history_age {
+            f.max_history_age = v;
+        }
+        if let Some(v) = patch.reconstruction {
+            f.reconstruction = v;
+        }
+        if let Some(v) = patch.sibson_window {
+            f.sibson_window = v;
+        }
+        if let Some(v) = patch.compaction {
+            f.compaction = v;
+        }
+        if let Some(v) = patch.dof {
+            self.dof = v;
+        }
+        if let Some(v) = patch.overlay {
+            self.overlay = v;
+        }
+        // Hand-tuned knobs make this a custom point near the named preset: say so.
+        if self.foveation != before && !self.preset.ends_with('*') {
+            self.preset.push('*');
+        }
+        Ok(())
+    }
+}
+
 impl Default for Settings {
     fn default() -> Self {
         Settings::preset("full").expect("full is a preset")

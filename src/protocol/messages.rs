@@ -116,6 +116,45 @@ pub struct Ack {
     pub dropped: bool,
 }
 
+/// Changes a session's quality knobs live. `preset` (if given) resets every knob to that
+/// preset first; the other fields then override single knobs. Omitted fields keep their value.
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SettingsPatch {
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub preset: Option<String>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub foveation: Option<bool>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub mar_slope: Option<f64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub mar_w0_deg: Option<f64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub min_probability: Option<f64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub probability: Option<crate::optics::acuity::ProbabilityForm>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub saliency: Option<bool>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub motion: Option<bool>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub noise: Option<crate::foveation::Noise>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub reprojection: Option<bool>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub max_history_age: Option<u32>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub reconstruction: Option<crate::foveation::Reconstruction>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub sibson_window: Option<u32>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub compaction: Option<bool>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub dof: Option<bool>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub overlay: Option<crate::foveation::settings::Overlay>,
+}
+
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct SceneInfo {
     pub name: String,

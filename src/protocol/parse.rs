@@ -1,6 +1,7 @@
 use serde::de::DeserializeOwned;
 use serde_json::{Map, Value};
 
+use super::messages::SettingsPatch;
 use super::{Ack, ErrorCode, Gaze, Hello, Limits, ProtocolError, PROTOCOL_VERSION};
 
 /// A client message that parsed and passed every range check.
@@ -9,6 +10,7 @@ pub enum ClientMessage {
     Hello(Hello),
     Gaze(Gaze),
     Ack(Ack),
+    Settings(SettingsPatch),
 }
 
 /// Parses and validates one text message. Scene and preset names are checked by the session,
@@ -36,7 +38,7 @@ pub fn parse_client_message(text: &str, limits: &Limits) -> Result<ClientMessage
         None => {
             return Err(ProtocolError::new(
                 ErrorCode::MissingType,
-                "message has no `type` (expected hello, gaze or ack)",
+                "message has no `type` (expected hello, gaze, ack or settings)",
             ))
         }
     };
@@ -58,9 +60,14 @@ pub fn parse_client_message(text: &str, limits: &Limits) -> Result<ClientMessage
             }
             Ok(ClientMessage::Ack(ack))
         }
+        "settings" => {
+            let patch: SettingsPatch = fields(map, "settings")?;
+            validate_settings(&patch)?;
+            Ok(ClientMessage::Settings(patch))
+        }
         other => Err(ProtocolError::new(
             ErrorCode::UnknownType,
-            format!("unknown message type {other:?} (expected hello, gaze or ack)"),
+            format!("unknown message type {other:?} (expected hello, gaze, ack or settings)"),
         )),
     }
 }
@@ -129,6 +136,25 @@ fn validate_hello(h: &Hello, limits: &Limits) -> Result<(), ProtocolError> {
     in_range("display.distance_cm", h.display.distance_cm, 1.0, 10_000.0)?;
     in_range("quality", f64::from(h.quality), 1.0, 100.0)?;
     in_range("max_in_flight", f64::from(h.max_in_flight), 1.0, f64::from(limits.max_in_flight))?;
+    Ok(())
+}
+
+fn validate_settings(p: &SettingsPatch) -> Result<(), ProtocolError> {
+    if let Some(v) = p.mar_slope {
+        in_range("mar_slope", v, 0.0, 1.0)?;
+    }
+    if let Some(v) = p.mar_w0_deg {
+        in_range("mar_w0_deg", v, 0.001, 1.0)?;
+    }
+    if let Some(v) = p.min_probability {
+        in_range("min_probability", v, 0.0, 1.0)?;
+    }
+    if let Some(v) = p.max_history_age {
+        in_range("max_history_age", f64::from(v), 0.0, 1000.0)?;
+    }
+    if let Some(v) = p.sibson_window {
+        in_range("sibson_window", f64::from(v), 0.0, 32.0)?;
+    }
     Ok(())
 }
 

@@ -2,24 +2,22 @@
 //! pipelines, per-scene GPU data and per-size targets and turns a [`FrameRequest`] into pixels;
 //! [`RenderThread`] runs a `Renderer` on its own thread so nothing async ever waits on the GPU.
 //!
-//! Passes, in frame order, one file each beside its shader in `shaders/`:
-//! [`pass::forward`] (lit mesh), [`pass::marker`] (gaze marker overlay).
+//! Passes, in frame order, one file each beside its shader in `shaders/` (see [`pass`]):
+//! G-buffer → sampling map → compaction → shading → jump flooding → resolve → depth of field →
+//! output → gaze marker. Full and reference modes shade every pixel and skip the foveation passes.
 
 pub mod cpu_reference;
 mod device;
+pub mod gpu;
 pub mod pass;
 mod renderer;
 mod targets;
 mod thread;
+pub mod uniforms;
 
 pub use device::Gpu;
-pub use renderer::{FrameRequest, RenderedFrame, Renderer};
+pub use renderer::{f16_to_f32, FrameRequest, Inspection, RenderedFrame, Renderer, DEFAULT_PUPIL_MM};
 pub use thread::{RenderHandle, RenderThread, Rendered};
-
-/// Colour target format: sRGB so the GPU applies the transfer curve on write, and read-back
-/// bytes are display-ready for the encoders.
-pub const COLOR_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8UnormSrgb;
-pub const DEPTH_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Depth32Float;
 
 #[derive(Debug, thiserror::Error)]
 pub enum RenderError {

@@ -1,19 +1,34 @@
 use std::collections::HashMap;
 use std::time::Instant;
 
-use glam::Vec3;
+use glam::{Mat4, Vec3};
 
-use super::pass::forward::{ForwardPass, Lighting, SceneBuffers};
+use super::gpu::{self, FramePass};
+use super::pass::compact::CompactPass;
+use super::pass::gbuffer::{GBufferPass, GBufferTargets, MeshBuffers};
+use super::pass::jfa::JfaPass;
 use super::pass::marker::MarkerPass;
-use super::targets::FrameTargets;
+use super::pass::shade::ShadePass;
+use super::pass::{dof, output, resolve, sampling};
+use super::targets::{map_read, FrameTargets};
+use super::uniforms::*;
 use super::{Gpu, RenderError};
+use crate::foveation::rank_map;
+use crate::foveation::reprojection::DEFAULT_EPSILON;
+use crate::foveation::{Noise, Reconstruction, Settings};
+use crate::optics::acuity::{mar_deg, ProbabilityForm, Viewing};
 use crate::optics::color::srgb8_to_linear;
-use crate::scene::Scene;
+use crate::protocol::Display;
+use crate::scene::{Camera, Scene};
 
 /// Largest side a frame may have; matches wgpu's default 2-D texture limit.
 pub const MAX_SIDE: u32 = 8192;
-/// Target sets kept alive for reuse; sessions rarely use more than a couple of sizes.
-const TARGET_CACHE: usize = 4;
+/// Target sets (one per stream and size) kept alive; the oldest goes first.
+const TARGET_CACHE: usize = 8;
+/// Smallest effective ξ: the rank-0 pixel of every 64×64 blue-noise tile is always shaded.
+pub const MIN_XI: f32 = 1.0 / (rank_map::TILE * rank_map::TILE) as f32;
+/// Pupil diameter assumed when a sample carries none: a typical indoor value.
+pub const DEFAULT_PUPIL_MM: f32 = 4.0;
 
 /// Everything that decides one frame's pixels.
 #[derive(Debug, Clone, PartialEq)]
@@ -21,15 +36,36 @@ pub struct FrameRequest {
     pub scene: String,
     pub width: u32,
     pub height: u32,
-    /// Normalised gaze (top-left origin) at which the marker is drawn; `None` draws no marker.
-    pub gaze: Option<[f32; 2]>,
+    /// Normalised gaze (top-left origin) the frame is foveated around.
+    pub gaze: [f32; 2],
+    /// Draw the gaze marker at `gaze`.
+    pub marker: bool,
+    pub pupil_mm: f32,
+    pub display: Display,
+    pub settings: Settings,
     /// Overrides the scene light's direction (unit vector towards the light).
     pub to_light: Option<Vec3>,
+    /// Overrides the scene camera.
+    pub camera: Option<Camera>,
+    /// Whose frame sequence this is: history (reprojection) is kept per stream.
+    pub stream: u64,
 }
 
 impl FrameRequest {
     pub fn new(scene: &str, width: u32, height: u32) -> FrameRequest {
-        FrameRequest { scene: scene.to_string(), width, height, gaze: None, to_light: None }
+        FrameRequest {
+            scene: scene.to_string(),
+            width,
+            height,
+            gaze: [0.5, 0.5],
+            marker: false,
+            pupil_mm: DEFAULT_PUPIL_MM,
+            display: Display::default(),
+            settings: Settings::default(),
+            to_light: None,
+            camera: None,
+            stream: 0,
+        }
     }
 }
 
@@ -40,17 +76,45 @@ pub struct RenderedFrame {
     pub height: u32,
     /// Tightly packed RGBA8, sRGB-encoded, top row first.
     pub rgba: Vec<u8>,
+    /// Fraction of the frame's pixels the shading pass ran for.
+    pub sampled: f64,
     pub render_ms: f64,
     pub readback_ms: f64,
 }
 
+/// Intermediate images of the last frame of a stream, for tests and diagnostics.
+#[derive(Debug, Clone)]
+pub struct Inspection {
+    pub probability: Vec<f32>,
+    pub flags: Vec<u32>,
+    pub seeds: Vec<u32>,
+    pub nearest: Vec<u32>,
+    pub color: Vec<[f32; 4]>,
+    pub resolved: Vec<[f32; 4]>,
+    pub normal_distance: Vec<[f32; 4]>,
+}
+
+pub(crate) struct Passes {
+    pub gbuffer: GBufferPass,
+    pub sampling: FramePass,
+    pub compact: CompactPass,
+    pub shade: ShadePass,
+    pub jfa: JfaPass,
+    pub resolve: FramePass,
+    pub dof: FramePass,
+    pub output: FramePass,
+    pub marker: MarkerPass,
+}
+
+type TargetKey = (u64, String, u32, u32);
+
 /// Owns the GPU and everything on it. Not shared: one thread drives it (see `RenderThread`).
 pub struct Renderer {
     gpu: Gpu,
-    forward: ForwardPass,
-    marker: MarkerPass,
-    scenes: HashMap<String, (Scene, SceneBuffers)>,
-    targets: Vec<FrameTargets>,
+    passes: Passes,
+    rank_map: wgpu::TextureView,
+    scenes: HashMap<String, (Scene, MeshBuffers)>,
+    targets: Vec<(TargetKey, FrameTargets)>,
 }
 
 impl Renderer {
@@ -59,9 +123,33 @@ impl Renderer {
     }
 
     pub fn with_gpu(gpu: Gpu) -> Renderer {
-        let forward = ForwardPass::new(&gpu.device);
-        let marker = MarkerPass::new(&gpu.device);
-        Renderer { gpu, forward, marker, scenes: HashMap::new(), targets: Vec::new() }
+        let d = &gpu.device;
+        let passes = Passes {
+            gbuffer: GBufferPass::new(d),
+            sampling: sampling::new(d),
+            compact: CompactPass::new(d),
+            shade: ShadePass::new(d),
+            jfa: JfaPass::new(d),
+            resolve: resolve::new(d),
+            dof: dof::new(d),
+            output: output::new(d),
+            marker: MarkerPass::new(d),
+        };
+        let side = rank_map::TILE;
+        let rank = gpu::texture_2d(
+            d,
+            "sampling.rank_map",
+            (side, side),
+            wgpu::TextureFormat::R32Float,
+            wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST,
+        );
+        gpu.queue.write_texture(
+            rank.as_image_copy(),
+            bytemuck::cast_slice(&rank_map::thresholds()),
+            wgpu::TexelCopyBufferLayout { offset: 0, bytes_per_row: Some(side * 4), rows_per_image: Some(side) },
+            wgpu::Extent3d { width: side, height: side, depth_or_array_layers: 1 },
+        );
+        Renderer { passes, rank_map: gpu::view(&rank), gpu, scenes: HashMap::new(), targets: Vec::new() }
     }
 
     pub fn adapter(&self) -> String {
@@ -72,12 +160,17 @@ impl Renderer {
     pub fn load_scene(&mut self, name: &str) -> Result<&Scene, RenderError> {
         if !self.scenes.contains_key(name) {
             let scene = Scene::builtin(name)?;
-            let buffers = self.forward.upload(&self.gpu.device, &scene);
+            let mesh = self.passes.gbuffer.upload(&self.gpu.device, &scene);
             tracing::info!(scene = name, triangles = scene.mesh.triangle_count(), "scene loaded");
-            self.scenes.insert(name.to_string(), (scene, buffers));
+            self.scenes.insert(name.to_string(), (scene, mesh));
         }
         let (scene, _) = &self.scenes[name];
         Ok(scene)
+    }
+
+    /// Frees a stream's targets and history (a session ended).
+    pub fn release_stream(&mut self, stream: u64) {
+        self.targets.retain(|(k, _)| k.0 != stream);
     }
 
     pub fn render(&mut self, req: &FrameRequest) -> Result<RenderedFrame, RenderError> {
@@ -87,34 +180,49 @@ impl Renderer {
         }
         self.load_scene(&req.scene)?;
         let started = Instant::now();
-        let ti = self.target_index(w, h);
-        let (scene, buffers) = &self.scenes[&req.scene];
-        let targets = &self.targets[ti];
+        let ti = self.target_index(req.stream, &req.scene, w, h);
+        let (scene, mesh) = &self.scenes[&req.scene];
+        let t = &self.targets[ti].1;
         let device = &self.gpu.device;
         let queue = &self.gpu.queue;
+        let settings = &req.settings;
+        let fov = &settings.foveation;
+        let camera = req.camera.unwrap_or(scene.file.camera);
+        let uniform = frame_uniform(scene, &camera, req, t);
+        queue.write_buffer(&t.uniform, 0, bytemuck::bytes_of(&uniform));
 
         let scope = device.push_error_scope(wgpu::ErrorFilter::Validation);
-        let mut encoder =
-            device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("frame") });
-        let mut lighting = Lighting::of(scene);
-        if let Some(l) = req.to_light.and_then(|l| l.try_normalize()) {
-            lighting.to_light = l;
+        let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("frame") });
+        let (nd, albedo, previous) = t.gbuffer_views();
+        let targets = GBufferTargets { normal_distance: &nd, albedo: &albedo, previous: &previous, depth: &t.depth };
+        let p = &self.passes;
+        let size = (w, h);
+        p.gbuffer.encode(&mut encoder, &targets, &t.bind.gbuffer, mesh);
+        if fov.enabled {
+            encoder.clear_buffer(&t.counter, 0, None);
+            p.sampling.encode(&mut encoder, &t.bind.sampling, size);
+            if fov.compaction {
+                p.compact.encode(&mut encoder, &t.bind.compact, size);
+                p.shade.encode_list(&mut encoder, &t.bind.shade, &t.counter);
+            } else {
+                p.shade.encode_grid(&mut encoder, &t.bind.shade, size);
+            }
+            let jfa: Vec<&wgpu::BindGroup> = t.bind.jfa.iter().collect();
+            p.jfa.encode(&mut encoder, &jfa, size);
+        } else {
+            p.shade.encode_grid(&mut encoder, &t.bind.shade, size);
         }
-        let background = Vec3::from(scene.file.background_srgb.map(srgb8_to_linear));
-        let view_proj = scene.file.camera.view_proj(w, h);
-        self.forward.encode(
-            queue,
-            &mut encoder,
-            &targets.color_view,
-            &targets.depth_view,
-            buffers,
-            view_proj,
-            &lighting,
-            background,
-        );
-        if let Some(g) = req.gaze {
-            self.marker.encode(queue, &mut encoder, &targets.color_view, (w, h), g);
+        p.resolve.encode(&mut encoder, &t.bind.resolve, size);
+        if settings.dof {
+            p.dof.encode(&mut encoder, &t.bind.dof, size);
+            p.output.encode(&mut encoder, &t.bind.output_dof, size);
+        } else {
+            p.output.encode(&mut encoder, &t.bind.output_resolved, size);
         }
+        if req.marker {
+            p.marker.encode(queue, &mut encoder, &t.final_view, size, req.gaze);
+        }
+        t.keep_history(&mut encoder);
         let submission = queue.submit([encoder.finish()]);
         device
             .poll(wgpu::PollType::Wait { submission_index: Some(submission), timeout: None })
@@ -125,20 +233,174 @@ impl Renderer {
         let render_ms = started.elapsed().as_secs_f64() * 1e3;
 
         let started = Instant::now();
-        let rgba = targets.read_back(device, queue)?;
+        let (rgba, count) = t.read_back(device, queue)?;
         let readback_ms = started.elapsed().as_secs_f64() * 1e3;
-        Ok(RenderedFrame { width: w, height: h, rgba, render_ms, readback_ms })
+        let sampled = if fov.enabled { f64::from(count) / (f64::from(w) * f64::from(h)) } else { 1.0 };
+
+        let view_proj = camera.view_proj(w, h);
+        let t = &mut self.targets[ti].1;
+        t.prev_view_proj = view_proj;
+        t.prev_eye = Vec3::from(camera.eye);
+        t.has_history = true;
+        t.frame_index = t.frame_index.wrapping_add(1);
+        Ok(RenderedFrame { width: w, height: h, rgba, sampled, render_ms, readback_ms })
     }
 
-    /// Index of the targets for this size, creating them (and evicting the oldest) if needed.
-    fn target_index(&mut self, w: u32, h: u32) -> usize {
-        if let Some(i) = self.targets.iter().position(|t| t.width == w && t.height == h) {
+    /// Reads back the intermediate images of a stream's last frame.
+    pub fn inspect(&self, stream: u64, scene: &str, width: u32, height: u32) -> Result<Inspection, RenderError> {
+        let key = (stream, scene.to_string(), width, height);
+        let (_, t) = self
+            .targets
+            .iter()
+            .find(|(k, _)| *k == key)
+            .ok_or_else(|| RenderError::Readback(format!("no frame rendered for stream {stream} at {width}x{height}")))?;
+        let read = |tex: &wgpu::Texture, bpp: u32| read_texture(&self.gpu, tex, bpp);
+        let f32s = |b: Vec<u8>| -> Vec<f32> { bytemuck::cast_slice(&b).to_vec() };
+        let u32s = |b: Vec<u8>| -> Vec<u32> { bytemuck::cast_slice(&b).to_vec() };
+        let halves = |b: Vec<u8>| -> Vec<[f32; 4]> {
+            b.chunks_exact(8)
+                .map(|c| std::array::from_fn(|i| f16_to_f32(u16::from_le_bytes([c[2 * i], c[2 * i + 1]]))))
+                .collect()
+        };
+        let quads = |b: Vec<u8>| -> Vec<[f32; 4]> { bytemuck::cast_slice::<u8, [f32; 4]>(&b).to_vec() };
+        Ok(Inspection {
+            probability: f32s(read(&t.probability, 4)?),
+            flags: u32s(read(&t.flags, 4)?),
+            seeds: u32s(read(&t.seeds, 4)?),
+            nearest: u32s(read(t.jfa_result(), 4)?),
+            color: halves(read(&t.color, 8)?),
+            resolved: halves(read(&t.resolved, 8)?),
+            normal_distance: quads(read(&t.normal_distance, 16)?),
+        })
+    }
+
+    fn target_index(&mut self, stream: u64, scene: &str, w: u32, h: u32) -> usize {
+        let key = (stream, scene.to_string(), w, h);
+        if let Some(i) = self.targets.iter().position(|(k, _)| *k == key) {
             return i;
         }
         if self.targets.len() >= TARGET_CACHE {
             self.targets.remove(0);
         }
-        self.targets.push(FrameTargets::new(&self.gpu.device, w, h));
+        let t = FrameTargets::new(&self.gpu.device, &self.gpu.queue, &self.passes, &self.rank_map, w, h);
+        self.targets.push((key, t));
         self.targets.len() - 1
     }
 }
+
+/// The R2 low-discrepancy sequence: tile offsets that cover the tile evenly over frames.
+fn tile_offset(frame: u32) -> [u32; 2] {
+    const G: f64 = 1.324_717_957_244_746;
+    let n = f64::from(frame);
+    let side = f64::from(rank_map::TILE);
+    [((n / G).fract() * side) as u32, ((n / (G * G)).fract() * side) as u32]
+}
+
+fn frame_uniform(scene: &Scene, camera: &Camera, req: &FrameRequest, t: &FrameTargets) -> FrameUniform {
+    let (w, h) = (req.width, req.height);
+    let view_proj = camera.view_proj(w, h);
+    let eye = Vec3::from(camera.eye);
+    let (prev_view_proj, prev_eye, history) =
+        if t.has_history { (t.prev_view_proj, t.prev_eye, 1.0) } else { (view_proj, eye, 0.0) };
+    let s = &req.settings;
+    let fov = &s.foveation;
+    let mut mode = 0;
+    for (on, bit) in [
+        (fov.enabled, MODE_FOVEATED),
+        (fov.saliency, MODE_SALIENCY),
+        (fov.motion, MODE_MOTION),
+        (fov.noise == Noise::White, MODE_WHITE_NOISE),
+        (fov.reprojection, MODE_REPROJECTION),
+        (fov.reconstruction == Reconstruction::Sibson, MODE_SIBSON),
+        (s.dof, MODE_DOF),
+    ] {
+        if on {
+            mode |= bit;
+        }
+    }
+    let viewing = Viewing { width: w, height: h, width_cm: req.display.width_cm, distance_cm: req.display.distance_cm };
+    let gaze_px = [f64::from(req.gaze[0]) * f64::from(w), f64::from(req.gaze[1]) * f64::from(h)];
+    let w_min = viewing.pixel_angle_deg();
+    let w_far = mar_deg(viewing.max_eccentricity_deg(gaze_px), f64::from(fov.mar_slope), f64::from(fov.mar_w0_deg));
+    let lighting = &scene.file.light;
+    let to_light = req.to_light.and_then(|l| l.try_normalize()).unwrap_or(Vec3::from(lighting.to_light));
+    let light = Vec3::from(lighting.color) * lighting.intensity;
+    let target_distance = (Vec3::from(camera.target) - eye).length();
+    let offset = tile_offset(t.frame_index);
+    let overlay = match s.overlay {
+        crate::foveation::settings::Overlay::None => 0,
+        crate::foveation::settings::Overlay::Samples => 1,
+        crate::foveation::settings::Overlay::Probability => 2,
+    };
+    FrameUniform {
+        view_proj: view_proj.to_cols_array_2d(),
+        inv_view_proj: view_proj.inverse().to_cols_array_2d(),
+        prev_view_proj: prev_view_proj.to_cols_array_2d(),
+        eye: eye.extend(scene.file.metres_per_unit).to_array(),
+        prev_eye: prev_eye.extend(history).to_array(),
+        to_light: to_light.extend(0.0).to_array(),
+        light: light.extend(0.0).to_array(),
+        albedo_ambient: Vec3::from(scene.file.albedo).extend(scene.file.ambient).to_array(),
+        background: Vec3::from(scene.file.background_srgb.map(srgb8_to_linear)).extend(1.0).to_array(),
+        size: [w, h, t.frame_index, mode],
+        gaze: [gaze_px[0] as f32, gaze_px[1] as f32, req.pupil_mm, target_distance],
+        viewing: [(viewing.width_cm / f64::from(w)) as f32, viewing.distance_cm as f32, w_min as f32, w_far as f32],
+        acuity: [
+            fov.mar_slope,
+            fov.mar_w0_deg,
+            // The forced minimum: ξ never drops below one sample per blue-noise tile, so every
+            // 64×64 block of the object keeps at least one shaded sample to reconstruct from.
+            fov.min_probability.clamp(MIN_XI, 1.0),
+            if fov.probability == ProbabilityForm::Density { 1.0 } else { 0.0 },
+        ],
+        temporal: [
+            fov.max_history_age as f32,
+            DEFAULT_EPSILON,
+            camera.fov_y_deg.to_radians() / h as f32,
+            fov.sibson_max_window() as f32,
+        ],
+        tile: [offset[0], offset[1], overlay, 0],
+    }
+}
+
+fn read_texture(gpu: &Gpu, texture: &wgpu::Texture, bytes_per_pixel: u32) -> Result<Vec<u8>, RenderError> {
+    let (w, h) = (texture.width(), texture.height());
+    let align = wgpu::COPY_BYTES_PER_ROW_ALIGNMENT;
+    let row = w * bytes_per_pixel;
+    let padded = row.div_ceil(align) * align;
+    let buffer = gpu.device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some("inspect"),
+        size: u64::from(padded) * u64::from(h),
+        usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
+        mapped_at_creation: false,
+    });
+    let mut encoder = gpu.device.create_command_encoder(&Default::default());
+    encoder.copy_texture_to_buffer(
+        texture.as_image_copy(),
+        wgpu::TexelCopyBufferInfo {
+            buffer: &buffer,
+            layout: wgpu::TexelCopyBufferLayout { offset: 0, bytes_per_row: Some(padded), rows_per_image: Some(h) },
+        },
+        wgpu::Extent3d { width: w, height: h, depth_or_array_layers: 1 },
+    );
+    let submission = gpu.queue.submit([encoder.finish()]);
+    map_read(&gpu.device, submission, &buffer, |bytes| {
+        bytes.chunks_exact(padded as usize).flat_map(|c| c[..row as usize].to_vec()).collect()
+    })
+}
+
+/// IEEE half → single precision (the GPU's rgba16float history and colour textures).
+pub fn f16_to_f32(h: u16) -> f32 {
+    let sign = if h & 0x8000 != 0 { -1.0 } else { 1.0 };
+    let exp = i32::from((h >> 10) & 0x1F);
+    let frac = f32::from(h & 0x3FF);
+    match exp {
+        0 => sign * frac * 2f32.powi(-24),
+        31 if frac == 0.0 => sign * f32::INFINITY,
+        31 => f32::NAN,
+        _ => sign * (1.0 + frac / 1024.0) * 2f32.powi(exp - 15),
+    }
+}
+
+#[allow(dead_code)]
+fn _assert_mat(_: Mat4) {}

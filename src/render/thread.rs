@@ -13,10 +13,10 @@ use super::{FrameRequest, RenderError, RenderedFrame, Renderer};
 /// flight, and a queue longer than that would only add latency.
 const QUEUE_DEPTH: usize = 16;
 
-struct Job {
-    request: FrameRequest,
-    enqueued: Instant,
-    reply: oneshot::Sender<Result<Rendered, RenderError>>,
+enum Job {
+    Render { request: FrameRequest, enqueued: Instant, reply: oneshot::Sender<Result<Rendered, RenderError>> },
+    /// A stream (session) ended: free its targets and history.
+    Release(u64),
 }
 
 /// A rendered frame plus how long it waited for the render thread.
@@ -36,9 +36,15 @@ pub struct RenderHandle {
 impl RenderHandle {
     pub async fn render(&self, request: FrameRequest) -> Result<Rendered, RenderError> {
         let (reply, rx) = oneshot::channel();
-        let job = Job { request, enqueued: Instant::now(), reply };
+        let job = Job::Render { request, enqueued: Instant::now(), reply };
         self.tx.send(job).await.map_err(|_| RenderError::ThreadGone)?;
         rx.await.map_err(|_| RenderError::ThreadGone)?
+    }
+
+    /// Frees what the renderer keeps for `stream`. Never blocks: if the queue is full the
+    /// targets simply age out of the renderer's cache instead.
+    pub fn release(&self, stream: u64) {
+        let _ = self.tx.try_send(Job::Release(stream));
     }
 
     /// The adapter's one-line description.
@@ -63,11 +69,18 @@ impl RenderThread {
 
 fn run(mut renderer: Renderer, mut rx: mpsc::Receiver<Job>) {
     while let Some(job) = rx.blocking_recv() {
-        let queue_ms = job.enqueued.elapsed().as_secs_f64() * 1e3;
-        let span = tracing::debug_span!("render", w = job.request.width, h = job.request.height);
+        let (request, enqueued, reply) = match job {
+            Job::Render { request, enqueued, reply } => (request, enqueued, reply),
+            Job::Release(stream) => {
+                renderer.release_stream(stream);
+                continue;
+            }
+        };
+        let queue_ms = enqueued.elapsed().as_secs_f64() * 1e3;
+        let span = tracing::debug_span!("render", w = request.width, h = request.height);
         let _enter = span.enter();
         // A panic inside the driver stack must not take every session down with it.
-        let result = std::panic::catch_unwind(AssertUnwindSafe(|| renderer.render(&job.request)))
+        let result = std::panic::catch_unwind(AssertUnwindSafe(|| renderer.render(&request)))
             .unwrap_or_else(|panic| {
                 let what = panic
                     .downcast_ref::<String>()
@@ -78,7 +91,7 @@ fn run(mut renderer: Renderer, mut rx: mpsc::Receiver<Job>) {
                 Err(RenderError::Gpu(format!("renderer panicked: {what}")))
             });
         // The session may have gone away meanwhile; then nobody wants the frame.
-        let _ = job.reply.send(result.map(|frame| Rendered { frame, queue_ms }));
+        let _ = reply.send(result.map(|frame| Rendered { frame, queue_ms }));
     }
     tracing::debug!("render thread stopping: no more handles");
 }

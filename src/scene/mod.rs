@@ -63,6 +63,13 @@ pub struct SceneFile {
     pub background_srgb: [u8; 3],
     pub light: Light,
     pub camera: Camera,
+    /// Size of one scene unit in metres (depth of field works in metres). Default: centimetres.
+    #[serde(default = "centimetres")]
+    pub metres_per_unit: f32,
+}
+
+fn centimetres() -> f32 {
+    0.01
 }
 
 /// A loaded, validated scene.
@@ -112,6 +119,9 @@ impl Scene {
             && file.light.intensity >= 0.0;
         if !light_ok {
             return Err(invalid("light colour and intensity must be finite and ≥ 0".into()));
+        }
+        if !(file.metres_per_unit.is_finite() && file.metres_per_unit > 0.0) {
+            return Err(invalid(format!("metres_per_unit {} must be finite and > 0", file.metres_per_unit)));
         }
         let mesh = Mesh::with_smooth_normals(ply.positions, ply.indices);
         Ok(Scene { file, mesh })

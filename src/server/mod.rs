@@ -19,9 +19,6 @@ use crate::render::RenderHandle;
 
 pub use app::router;
 
-/// Presets a session may ask for. Foveated presets arrive with the foveation work.
-pub const PRESETS: &[&str] = &["full"];
-
 /// Hard cap on one WebSocket message; above `Limits::max_message_bytes` messages still get a
 /// polite `too_large` error, above this the transport closes the socket (code 1009).
 pub const HARD_MESSAGE_LIMIT: usize = 64 * 1024;

@@ -14,8 +14,9 @@ use std::time::Instant;
 use axum::extract::ws::{CloseFrame, Message, WebSocket};
 use futures_util::{SinkExt, StreamExt};
 
-use super::{ServerState, PRESETS};
+use super::ServerState;
 use crate::encode;
+use crate::foveation::{Settings, PRESETS};
 use crate::protocol::{
     encode_frame, parse_client_message, ClientMessage, ErrorCode, FrameHeader, Gaze, GazeUsed,
     Hello, ProtocolError, ServerMessage, StageTimes, Welcome, PROTOCOL_VERSION,
@@ -37,6 +38,9 @@ type Making = Pin<Box<dyn Future<Output = Result<Vec<u8>, ProtocolError>> + Send
 #[derive(Default)]
 struct Session {
     hello: Option<Hello>,
+    settings: Settings,
+    /// Last pupil diameter a sample carried.
+    pupil_mm: Option<f64>,
     /// Newest gaze sample not yet rendered, with its arrival time.
     latest: Option<(Gaze, Instant)>,
     /// The last sample rendered (kept so a new frame can be made without a new sample).
@@ -59,7 +63,7 @@ pub async fn run(socket: WebSocket, state: Arc<ServerState>, id: u64) {
     let mut sent = 0u64;
     let close = loop {
         if making.is_none() {
-            if let Some(job) = s.next_job() {
+            if let Some(job) = s.next_job(id) {
                 making = Some(Box::pin(make_frame(state.clone(), job)));
             }
         }
@@ -107,6 +111,7 @@ pub async fn run(socket: WebSocket, state: Arc<ServerState>, id: u64) {
         for reply in replies {
             if tx.send(reply).await.is_err() {
                 tracing::debug!(session = id, "client went away while we were sending");
+                state.render.release(id);
                 return;
             }
         }
@@ -114,6 +119,7 @@ pub async fn run(socket: WebSocket, state: Arc<ServerState>, id: u64) {
     if let Some(frame) = close {
         let _ = tx.send(Message::Close(Some(frame))).await;
     }
+    state.render.release(id);
     tracing::info!(
         session = id,
         frames = sent,
@@ -144,6 +150,20 @@ impl Session {
                     self.coalesced += 1;
                 }
                 self.latest = Some((gaze, Instant::now()));
+                if gaze.pupil_mm.is_some() {
+                    self.pupil_mm = gaze.pupil_mm;
+                }
+                self.dirty = true;
+                None
+            }
+            ClientMessage::Settings(patch) => {
+                if self.hello.is_none() {
+                    return Some(no_hello("settings"));
+                }
+                if let Err(name) = self.settings.apply(&patch) {
+                    return Some(unknown_preset(&name));
+                }
+                tracing::debug!(session = id, preset = %self.settings.preset, "settings changed");
                 self.dirty = true;
                 None
             }
@@ -178,13 +198,9 @@ impl Session {
             )
             .into();
         };
-        if !PRESETS.contains(&hello.preset.as_str()) {
-            return ProtocolError::new(
-                ErrorCode::UnknownPreset,
-                format!("unknown preset {:?}; available: {}", hello.preset, PRESETS.join(", ")),
-            )
-            .into();
-        }
+        let Some(settings) = Settings::preset(&hello.preset) else {
+            return unknown_preset(&hello.preset);
+        };
         tracing::info!(session = id, scene = %hello.scene, w = hello.width, h = hello.height, codec = ?hello.codec, "session started");
         let welcome = Welcome {
             v: PROTOCOL_VERSION,
@@ -200,13 +216,14 @@ impl Session {
             adapter: state.render.adapter().to_string(),
         };
         self.hello = Some(hello);
+        self.settings = settings;
         self.hello_at = Some(Instant::now());
         self.dirty = true; // the first frame shows the scene before any gaze arrives
         ServerMessage::Welcome(welcome)
     }
 
     /// The next frame to make, if there is something new and a credit to spend on it.
-    fn next_job(&mut self) -> Option<FrameJob> {
+    fn next_job(&mut self, stream: u64) -> Option<FrameJob> {
         let hello = self.hello.as_ref()?;
         if !self.dirty || self.unacked.len() >= hello.max_in_flight as usize {
             return None;
@@ -219,11 +236,19 @@ impl Session {
         self.dirty = false;
         self.frames_made += 1;
         self.unacked.insert(self.frames_made);
-        let xy = gaze.map(|g| [g.x as f32, g.y as f32]).unwrap_or([0.5, 0.5]);
         let mut request = FrameRequest::new(&hello.scene, hello.width, hello.height);
-        request.gaze = Some(xy);
+        request.gaze = gaze.map(|g| [g.x as f32, g.y as f32]).unwrap_or([0.5, 0.5]);
+        request.marker = true;
+        request.pupil_mm = self.pupil_mm.map(|p| p as f32).unwrap_or(crate::render::DEFAULT_PUPIL_MM);
+        request.display = hello.display;
+        request.settings = self.settings.clone();
+        request.stream = stream;
         Some(FrameJob { frame: self.frames_made, gaze, arrived, request, hello: hello.clone() })
     }
+}
+
+fn unknown_preset(name: &str) -> ServerMessage {
+    ProtocolError::new(ErrorCode::UnknownPreset, format!("unknown preset {name:?}; available: {}", PRESETS.join(", "))).into()
 }
 
 fn no_hello(what: &str) -> ServerMessage {
@@ -241,7 +266,7 @@ async fn make_frame(state: Arc<ServerState>, job: FrameJob) -> Result<Vec<u8>, P
     let frame = rendered.frame;
     let (codec, quality) = (job.hello.codec, job.hello.quality);
     let (w, h) = (frame.width, frame.height);
-    let (render_ms, readback_ms) = (frame.render_ms, frame.readback_ms);
+    let (render_ms, readback_ms, sampled) = (frame.render_ms, frame.readback_ms, frame.sampled);
     let rgba = frame.rgba;
     let encoded = tokio::task::spawn_blocking(move || {
         let started = Instant::now();
@@ -250,7 +275,7 @@ async fn make_frame(state: Arc<ServerState>, job: FrameJob) -> Result<Vec<u8>, P
     .await
     .map_err(|e| failed("encoder task", &e))?;
     let (image, encode_time) = encoded.map_err(|e| failed("encode", &e))?;
-    let [x, y] = job.request.gaze.unwrap_or([0.5, 0.5]);
+    let [x, y] = job.request.gaze;
     let header = FrameHeader {
         frame: job.frame,
         seq: job.gaze.map(|g| g.seq),
@@ -259,7 +284,7 @@ async fn make_frame(state: Arc<ServerState>, job: FrameJob) -> Result<Vec<u8>, P
         width: w,
         height: h,
         codec,
-        sampled: 1.0,
+        sampled,
         stages_ms: StageTimes {
             queue,
             render: render_ms,

@@ -1,0 +1,101 @@
+// Shared by every pass: the frame's uniforms and small helpers. Prepended to each pass's source
+// (see src/render/gpu.rs `compose`).
+
+struct Frame {
+    view_proj: mat4x4<f32>,
+    inv_view_proj: mat4x4<f32>,
+    prev_view_proj: mat4x4<f32>,
+    // xyz: camera position; w: metres per scene unit.
+    eye: vec4<f32>,
+    // xyz: last frame's camera position; w: 1 when last frame's buffers are valid history.
+    prev_eye: vec4<f32>,
+    // xyz: unit vector towards the light.
+    to_light: vec4<f32>,
+    // rgb: light colour × intensity.
+    light: vec4<f32>,
+    // rgb: diffuse albedo; w: ambient as a fraction of the light.
+    albedo_ambient: vec4<f32>,
+    // rgb: background colour, linear.
+    background: vec4<f32>,
+    // x, y: frame size; z: frame index; w: mode bits (MODE_*).
+    size: vec4<u32>,
+    // xy: gaze in pixels (top-left origin); z: pupil diameter, mm; w: focus distance, scene units.
+    gaze: vec4<f32>,
+    // x: display cm per pixel; y: viewing distance, cm; z: w_min (pixel angle), deg; w: w_far, deg.
+    viewing: vec4<f32>,
+    // x: MAR slope; y: MAR at the fovea w0, deg; z: minimum probability ξ; w: 0 linear, 1 density form.
+    acuity: vec4<f32>,
+    // x: max history age, frames; y: relative depth tolerance ε; z: camera radians per pixel;
+    // w: Sibson window bound, pixels.
+    temporal: vec4<f32>,
+    // xy: blue-noise tile offset; z: overlay (0 none, 1 samples, 2 probability); w: unused.
+    tile: vec4<u32>,
+}
+
+const MODE_FOVEATED: u32 = 1u;
+const MODE_SALIENCY: u32 = 2u;
+const MODE_MOTION: u32 = 4u;
+const MODE_WHITE_NOISE: u32 = 8u;
+const MODE_REPROJECTION: u32 = 16u;
+const MODE_SIBSON: u32 = 32u;
+const MODE_DOF: u32 = 64u;
+
+// Per-pixel state written by the sampling pass.
+const FLAG_COVERED: u32 = 1u;
+const FLAG_SAMPLED: u32 = 2u;
+const FLAG_REUSED: u32 = 4u;
+
+const NO_SEED: u32 = 0xFFFFFFFFu;
+// History age marking "no valid colour here".
+const INVALID_AGE: f32 = 65000.0;
+
+@group(0) @binding(0) var<uniform> frame: Frame;
+
+fn has_mode(bit: u32) -> bool {
+    return (frame.size.w & bit) != 0u;
+}
+
+fn frame_size() -> vec2<i32> {
+    return vec2<i32>(i32(frame.size.x), i32(frame.size.y));
+}
+
+fn in_frame(p: vec2<i32>) -> bool {
+    let s = frame_size();
+    return p.x >= 0 && p.y >= 0 && p.x < s.x && p.y < s.y;
+}
+
+fn pack_seed(p: vec2<i32>) -> u32 {
+    return u32(p.x) | (u32(p.y) << 16u);
+}
+
+fn unpack_seed(s: u32) -> vec2<i32> {
+    return vec2<i32>(i32(s & 0xFFFFu), i32(s >> 16u));
+}
+
+// Squared distance to a seed; a huge value (not infinity: integers) without one.
+fn seed_dist2(s: u32, p: vec2<i32>) -> i32 {
+    if (s == NO_SEED) {
+        return 0x7FFFFFFF;
+    }
+    let d = unpack_seed(s) - p;
+    return d.x * d.x + d.y * d.y;
+}
+
+// Direct lighting of a Lambertian surface; CPU twin: optics::shading::lambert.
+fn lambert(normal: vec3<f32>, albedo: vec3<f32>) -> vec3<f32> {
+    let len = length(normal);
+    var n = vec3<f32>(0.0);
+    if (len > 1e-20) {
+        n = normal / len;
+    }
+    let cos_theta = max(dot(n, frame.to_light.xyz), 0.0);
+    return albedo * frame.light.rgb * (cos_theta + frame.albedo_ambient.w);
+}
+
+// Unit direction of the camera ray through pixel centre p.
+fn view_ray(p: vec2<f32>) -> vec3<f32> {
+    let s = vec2<f32>(frame_size());
+    let ndc = vec2<f32>(p.x / s.x * 2.0 - 1.0, 1.0 - p.y / s.y * 2.0);
+    let far = frame.inv_view_proj * vec4<f32>(ndc, 1.0, 1.0);
+    return normalize(far.xyz / far.w - frame.eye.xyz);
+}

@@ -1,0 +1,54 @@
+// Depth of field from the viewer's pupil (gaze-contingent focus): each pixel averages a disc
+// as wide as its blur circle, β ≈ A·|1/d_focus − 1/d| (A pupil diameter, d_focus the depth under
+// the gaze). A simple gather over a Vogel spiral; the background is treated as in focus.
+
+@group(0) @binding(1) var src: texture_2d<f32>;
+@group(0) @binding(2) var normal_distance: texture_2d<f32>;
+@group(0) @binding(3) var out_dof: texture_storage_2d<rgba16float, write>;
+
+const TAPS: i32 = 24;
+const MAX_RADIUS_PX: f32 = 24.0;
+
+fn blur_radius_px(p: vec2<i32>) -> f32 {
+    let d = textureLoad(normal_distance, p, 0).w;
+    if (d <= 0.0) {
+        return 0.0;
+    }
+    let metres = frame.eye.w;
+    let focus = max(focus_distance() * metres, 1e-3);
+    let beta = frame.gaze.z * 1e-3 * abs(1.0 / focus - 1.0 / max(d * metres, 1e-3));
+    return min(0.5 * beta / frame.temporal.z, MAX_RADIUS_PX);
+}
+
+// Depth under the gaze: what the eye focuses on. Off the object, the camera's target distance.
+fn focus_distance() -> f32 {
+    let g = clamp(vec2<i32>(floor(frame.gaze.xy)), vec2<i32>(0), frame_size() - 1);
+    let d = textureLoad(normal_distance, g, 0).w;
+    if (d > 0.0) {
+        return d;
+    }
+    return frame.gaze.w;
+}
+
+@compute @workgroup_size(8, 8)
+fn main(@builtin(global_invocation_id) id: vec3<u32>) {
+    let p = vec2<i32>(id.xy);
+    if (!in_frame(p)) {
+        return;
+    }
+    let r = blur_radius_px(p);
+    if (r < 0.5) {
+        textureStore(out_dof, p, textureLoad(src, p, 0));
+        return;
+    }
+    var sum = vec3<f32>(0.0);
+    for (var i = 0; i < TAPS; i++) {
+        // Vogel spiral: even coverage of the disc with any tap count.
+        let t = (f32(i) + 0.5) / f32(TAPS);
+        let angle = f32(i) * 2.39996323;
+        let offset = vec2<f32>(cos(angle), sin(angle)) * sqrt(t) * r;
+        let q = clamp(p + vec2<i32>(round(offset)), vec2<i32>(0), frame_size() - 1);
+        sum += textureLoad(src, q, 0).rgb;
+    }
+    textureStore(out_dof, p, vec4<f32>(sum / f32(TAPS), 1.0));
+}

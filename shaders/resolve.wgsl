@@ -1,0 +1,75 @@
+// Resolve pass: every pixel gets a colour. Background from the G-buffer coverage; shaded and
+// reused pixels keep theirs; the rest take their nearest sample's colour (Voronoi) or the
+// windowed approximate Sibson average (thesis Listing 4 in gather form: every covered q in the
+// window whose empty circle |q − s(q)| reaches p contributes s(q)'s colour). The window is the
+// ξ bound shrunk to twice the distance to p's nearest sample. CPU twin:
+// foveation::reconstruct::reconstruct.
+
+@group(0) @binding(1) var color_tex: texture_2d<f32>;
+@group(0) @binding(2) var nearest_tex: texture_2d<u32>;
+@group(0) @binding(3) var albedo_tex: texture_2d<f32>;
+@group(0) @binding(4) var out_resolved: texture_storage_2d<rgba16float, write>;
+
+fn covered(p: vec2<i32>) -> bool {
+    return textureLoad(albedo_tex, p, 0).a > 0.5;
+}
+
+fn seed_color(s: u32) -> vec3<f32> {
+    return textureLoad(color_tex, unpack_seed(s), 0).rgb;
+}
+
+@compute @workgroup_size(8, 8)
+fn main(@builtin(global_invocation_id) id: vec3<u32>) {
+    let p = vec2<i32>(id.xy);
+    if (!in_frame(p)) {
+        return;
+    }
+    if (!has_mode(MODE_FOVEATED)) {
+        textureStore(out_resolved, p, vec4<f32>(textureLoad(color_tex, p, 0).rgb, 1.0));
+        return;
+    }
+    if (!covered(p)) {
+        textureStore(out_resolved, p, vec4<f32>(frame.background.rgb, 1.0));
+        return;
+    }
+    let s = textureLoad(nearest_tex, p, 0).r;
+    if (s == NO_SEED) {
+        // Nothing shaded anywhere on the object: ambient-only albedo, finite and plausible.
+        let a = textureLoad(albedo_tex, p, 0).rgb;
+        textureStore(out_resolved, p, vec4<f32>(a * frame.light.rgb * frame.albedo_ambient.w, 1.0));
+        return;
+    }
+    let d2 = seed_dist2(s, p);
+    if (d2 == 0 || !has_mode(MODE_SIBSON)) {
+        textureStore(out_resolved, p, vec4<f32>(seed_color(s), 1.0));
+        return;
+    }
+    let j = clamp(i32(ceil(2.0 * sqrt(f32(d2)))), 1, max(i32(frame.temporal.w), 1));
+    let lo = max(p - vec2<i32>(j), vec2<i32>(0));
+    let hi = min(p + vec2<i32>(j), frame_size() - 1);
+    var sum = vec3<f32>(0.0);
+    var count = 0.0;
+    for (var qy = lo.y; qy <= hi.y; qy++) {
+        for (var qx = lo.x; qx <= hi.x; qx++) {
+            let q = vec2<i32>(qx, qy);
+            if (!covered(q)) {
+                continue;
+            }
+            let sq = textureLoad(nearest_tex, q, 0).r;
+            if (sq == NO_SEED) {
+                continue;
+            }
+            let dq = q - p;
+            if (dq.x * dq.x + dq.y * dq.y > seed_dist2(sq, q)) {
+                continue;
+            }
+            sum += seed_color(sq);
+            count += 1.0;
+        }
+    }
+    var rgb = seed_color(s);
+    if (count > 0.0) {
+        rgb = sum / count;
+    }
+    textureStore(out_resolved, p, vec4<f32>(rgb, 1.0));
+}

@@ -1,0 +1,188 @@
+// Sampling pass (thesis eqs. 2–4): per pixel, the probability the eye needs it shaded, the
+// blue-noise decision, and for pixels not chosen, whether last frame's colour can be reused.
+// CPU twins: optics::acuity (probability, DoF), foveation::reprojection (cache test).
+
+@group(0) @binding(1) var normal_distance: texture_2d<f32>;
+@group(0) @binding(2) var albedo_tex: texture_2d<f32>;
+@group(0) @binding(3) var previous_px: texture_2d<f32>;
+@group(0) @binding(4) var rank_map: texture_2d<f32>;
+@group(0) @binding(5) var history_color: texture_2d<f32>;
+@group(0) @binding(6) var history_normal_distance: texture_2d<f32>;
+@group(0) @binding(7) var out_probability: texture_storage_2d<r32float, write>;
+@group(0) @binding(8) var out_flags: texture_storage_2d<r32uint, write>;
+@group(0) @binding(9) var out_color: texture_storage_2d<rgba16float, write>;
+@group(0) @binding(10) var out_seeds: texture_storage_2d<r32uint, write>;
+
+fn screen_point(p: vec2<f32>) -> vec3<f32> {
+    let s = vec2<f32>(frame_size());
+    return vec3<f32>((p - 0.5 * s) * frame.viewing.x, frame.viewing.y);
+}
+
+// Degrees between the gaze and pixel centre p, seen from the eye; atan2 form, exact near 0.
+fn eccentricity_deg(p: vec2<f32>) -> f32 {
+    let a = screen_point(frame.gaze.xy);
+    let b = screen_point(p);
+    return degrees(atan2(length(cross(a, b)), dot(a, b)));
+}
+
+fn acuity_probability(w: f32) -> f32 {
+    let w_min = frame.viewing.z;
+    let w_far = frame.viewing.w;
+    var p = 1.0;
+    if (frame.acuity.w < 0.5) {
+        let span = w_far - w_min;
+        if (span > 1e-12) {
+            p = 1.0 - (w - w_min) / span;
+        }
+    } else if (w > 1e-12) {
+        p = (w_min / w) * (w_min / w);
+    }
+    return clamp(p, 0.0, 1.0);
+}
+
+// CIE-Lab (D65) of a linear sRGB colour: saliency is measured where colour differences are
+// perceptually even, as the thesis does.
+fn lab_f(t: f32) -> f32 {
+    if (t > 0.008856) {
+        return pow(t, 1.0 / 3.0);
+    }
+    return 7.787 * t + 16.0 / 116.0;
+}
+
+fn to_lab(rgb: vec3<f32>) -> vec3<f32> {
+    let x = dot(rgb, vec3<f32>(0.4124, 0.3576, 0.1805)) / 0.95047;
+    let y = dot(rgb, vec3<f32>(0.2126, 0.7152, 0.0722));
+    let z = dot(rgb, vec3<f32>(0.0193, 0.1192, 0.9505)) / 1.08883;
+    let fx = lab_f(x);
+    let fy = lab_f(y);
+    let fz = lab_f(z);
+    return vec3<f32>(116.0 * fy - 16.0, 500.0 * (fx - fy), 200.0 * (fy - fz));
+}
+
+fn load_clamped(t: texture_2d<f32>, p: vec2<i32>) -> vec4<f32> {
+    return textureLoad(t, clamp(p, vec2<i32>(0), frame_size() - 1), 0);
+}
+
+// Largest per-pixel Sobel gradient of albedo (ΔE per pixel, /10) and normal (radians per
+// pixel, /0.25), each normalised to [0, 1]. Background counts as black with a zero normal, so
+// silhouettes are salient.
+fn saliency(p: vec2<i32>) -> f32 {
+    var gx_lab = vec3<f32>(0.0);
+    var gy_lab = vec3<f32>(0.0);
+    var gx_n = vec3<f32>(0.0);
+    var gy_n = vec3<f32>(0.0);
+    let kx = array<f32, 9>(-1.0, 0.0, 1.0, -2.0, 0.0, 2.0, -1.0, 0.0, 1.0);
+    let ky = array<f32, 9>(-1.0, -2.0, -1.0, 0.0, 0.0, 0.0, 1.0, 2.0, 1.0);
+    for (var j = 0; j < 3; j++) {
+        for (var i = 0; i < 3; i++) {
+            let q = p + vec2<i32>(i - 1, j - 1);
+            let a = load_clamped(albedo_tex, q);
+            let lab = to_lab(a.rgb * a.a);
+            let n = load_clamped(normal_distance, q).xyz;
+            let k = j * 3 + i;
+            gx_lab += kx[k] * lab;
+            gy_lab += ky[k] * lab;
+            gx_n += kx[k] * n;
+            gy_n += ky[k] * n;
+        }
+    }
+    // Sobel weights sum to 8 across the kernel: /8 gives a per-pixel derivative.
+    let d_lab = sqrt(gx_lab * gx_lab + gy_lab * gy_lab) / 8.0;
+    let d_n = sqrt(gx_n * gx_n + gy_n * gy_n) / 8.0;
+    let d_albedo = max(d_lab.x, max(d_lab.y, d_lab.z)) / 10.0;
+    let d_normal = max(d_n.x, max(d_n.y, d_n.z)) / 0.25;
+    return clamp(max(d_albedo, d_normal), 0.0, 1.0);
+}
+
+fn white_noise(p: vec2<u32>) -> f32 {
+    var h = p.x * 0x8da6b343u ^ p.y * 0xd8163841u ^ frame.size.z * 0xcb1ab31fu;
+    h = (h ^ (h >> 16u)) * 0x7feb352du;
+    h = (h ^ (h >> 15u)) * 0x846ca68bu;
+    h = h ^ (h >> 16u);
+    return f32(h >> 8u) / 16777216.0;
+}
+
+// Depth under the gaze: what the eye focuses on. Off the object, the camera's target distance.
+fn focus_distance() -> f32 {
+    let g = clamp(vec2<i32>(floor(frame.gaze.xy)), vec2<i32>(0), frame_size() - 1);
+    let d = textureLoad(normal_distance, g, 0).w;
+    if (d > 0.0) {
+        return d;
+    }
+    return frame.gaze.w;
+}
+
+@compute @workgroup_size(8, 8)
+fn main(@builtin(global_invocation_id) id: vec3<u32>) {
+    let p = vec2<i32>(id.xy);
+    if (!in_frame(p)) {
+        return;
+    }
+    let nd = textureLoad(normal_distance, p, 0);
+    let covered = textureLoad(albedo_tex, p, 0).a > 0.5;
+    if (!covered) {
+        textureStore(out_probability, p, vec4<f32>(0.0));
+        textureStore(out_flags, p, vec4<u32>(0u));
+        textureStore(out_color, p, vec4<f32>(frame.background.rgb, INVALID_AGE));
+        textureStore(out_seeds, p, vec4<u32>(NO_SEED));
+        return;
+    }
+    let centre = vec2<f32>(p) + 0.5;
+    let e = eccentricity_deg(centre);
+    var f = acuity_probability(frame.acuity.x * e + frame.acuity.y);
+    if (has_mode(MODE_SALIENCY)) {
+        f = max(f, saliency(p));
+    }
+    if (has_mode(MODE_MOTION)) {
+        let moved = length(textureLoad(previous_px, p, 0).xy - centre);
+        f = max(f, clamp(moved / 8.0, 0.0, 1.0));
+    }
+    if (has_mode(MODE_DOF)) {
+        // β ≈ A·|1/d_focus − 1/d|; a blur b pixels wide needs a sample every b pixels.
+        let metres = frame.eye.w;
+        let focus = max(focus_distance() * metres, 1e-3);
+        let d = max(nd.w * metres, 1e-3);
+        let blur_px = frame.gaze.z * 1e-3 * abs(1.0 / focus - 1.0 / d) / frame.temporal.z;
+        if (blur_px > 1.0) {
+            f = f / (blur_px * blur_px);
+        }
+    }
+    f = clamp(f, frame.acuity.z, 1.0);
+
+    var threshold: f32;
+    if (has_mode(MODE_WHITE_NOISE)) {
+        threshold = white_noise(vec2<u32>(id.xy));
+    } else {
+        let t = (vec2<u32>(id.xy) + frame.tile.xy) % vec2<u32>(64u);
+        threshold = textureLoad(rank_map, vec2<i32>(t), 0).r;
+    }
+    let sampled = threshold < f;
+    var flags = FLAG_COVERED;
+    var seed = NO_SEED;
+    var color = vec4<f32>(0.0, 0.0, 0.0, INVALID_AGE);
+    if (sampled) {
+        flags |= FLAG_SAMPLED;
+        seed = pack_seed(p);
+    } else if (has_mode(MODE_REPROJECTION) && frame.prev_eye.w > 0.5) {
+        // Eq. 4 with |x| and a relative tolerance; the stored depth is last frame's Euclidean
+        // distance from last frame's eye.
+        let prev = textureLoad(previous_px, p, 0).xy;
+        let uv = prev / vec2<f32>(frame_size());
+        if (all(uv >= vec2<f32>(0.0)) && all(uv < vec2<f32>(1.0))) {
+            let q = vec2<i32>(floor(prev));
+            let prev_distance = textureLoad(history_normal_distance, q, 0).w;
+            let world = frame.eye.xyz + view_ray(centre) * nd.w;
+            let now = distance(world, frame.prev_eye.xyz);
+            let old = textureLoad(history_color, q, 0);
+            if (abs(prev_distance - now) < frame.temporal.y * max(now, 1e-6) && old.a < frame.temporal.x) {
+                flags |= FLAG_REUSED;
+                seed = pack_seed(p);
+                color = vec4<f32>(old.rgb, old.a + 1.0);
+            }
+        }
+    }
+    textureStore(out_probability, p, vec4<f32>(f));
+    textureStore(out_flags, p, vec4<u32>(flags));
+    textureStore(out_color, p, color);
+    textureStore(out_seeds, p, vec4<u32>(seed));
+}

@@ -1,0 +1,148 @@
+//! G-buffer pass: rasterises the mesh into normal + distance, albedo + coverage and last-frame
+//! screen position (for reprojection and motion), with depth testing.
+
+use wgpu::util::DeviceExt;
+
+use crate::render::gpu;
+use crate::scene::Scene;
+
+pub const SHADER: &str = include_str!("../../../shaders/gbuffer.wgsl");
+pub const LABEL: &str = "gbuffer";
+
+pub const NORMAL_DISTANCE: wgpu::TextureFormat = wgpu::TextureFormat::Rgba32Float;
+pub const ALBEDO: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8Unorm;
+pub const PREVIOUS: wgpu::TextureFormat = wgpu::TextureFormat::Rg32Float;
+pub const DEPTH: wgpu::TextureFormat = wgpu::TextureFormat::Depth32Float;
+
+#[repr(C)]
+#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
+struct Vertex {
+    position: [f32; 3],
+    normal: [f32; 3],
+}
+
+/// A scene's mesh on the GPU.
+pub struct MeshBuffers {
+    vertices: wgpu::Buffer,
+    indices: wgpu::Buffer,
+    index_count: u32,
+}
+
+pub struct GBufferPass {
+    pipeline: wgpu::RenderPipeline,
+    pub layout: wgpu::BindGroupLayout,
+}
+
+/// The textures the pass writes.
+pub struct GBufferTargets<'a> {
+    pub normal_distance: &'a wgpu::TextureView,
+    pub albedo: &'a wgpu::TextureView,
+    pub previous: &'a wgpu::TextureView,
+    pub depth: &'a wgpu::TextureView,
+}
+
+impl GBufferPass {
+    pub fn new(device: &wgpu::Device) -> GBufferPass {
+        let module = gpu::shader(device, LABEL, SHADER);
+        let layout = gpu::layout(device, LABEL, &[gpu::uniform(0, false)]);
+        let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some(LABEL),
+            bind_group_layouts: &[Some(&layout)],
+            immediate_size: 0,
+        });
+        let target = |format: wgpu::TextureFormat| Some(wgpu::ColorTargetState::from(format));
+        let pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+            label: Some(LABEL),
+            layout: Some(&pipeline_layout),
+            vertex: wgpu::VertexState {
+                module: &module,
+                entry_point: Some("vs_main"),
+                compilation_options: Default::default(),
+                buffers: &[Some(wgpu::VertexBufferLayout {
+                    array_stride: std::mem::size_of::<Vertex>() as u64,
+                    step_mode: wgpu::VertexStepMode::Vertex,
+                    attributes: &wgpu::vertex_attr_array![0 => Float32x3, 1 => Float32x3],
+                })],
+            },
+            primitive: wgpu::PrimitiveState { cull_mode: Some(wgpu::Face::Back), ..Default::default() },
+            depth_stencil: Some(wgpu::DepthStencilState {
+                format: DEPTH,
+                depth_write_enabled: Some(true),
+                depth_compare: Some(wgpu::CompareFunction::Less),
+                stencil: Default::default(),
+                bias: Default::default(),
+            }),
+            multisample: Default::default(),
+            fragment: Some(wgpu::FragmentState {
+                module: &module,
+                entry_point: Some("fs_main"),
+                compilation_options: Default::default(),
+                targets: &[target(NORMAL_DISTANCE), target(ALBEDO), target(PREVIOUS)],
+            }),
+            multiview_mask: None,
+            cache: None,
+        });
+        GBufferPass { pipeline, layout }
+    }
+
+    pub fn upload(&self, device: &wgpu::Device, scene: &Scene) -> MeshBuffers {
+        let mesh = &scene.mesh;
+        let vertices: Vec<Vertex> = mesh
+            .positions
+            .iter()
+            .zip(&mesh.normals)
+            .map(|(p, n)| Vertex { position: p.to_array(), normal: n.to_array() })
+            .collect();
+        let label = Some(scene.name());
+        let vertices = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label,
+            contents: bytemuck::cast_slice(&vertices),
+            usage: wgpu::BufferUsages::VERTEX,
+        });
+        let indices = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label,
+            contents: bytemuck::cast_slice(&mesh.indices),
+            usage: wgpu::BufferUsages::INDEX,
+        });
+        MeshBuffers { vertices, indices, index_count: mesh.indices.len() as u32 }
+    }
+
+    pub fn encode(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        targets: &GBufferTargets,
+        bind_group: &wgpu::BindGroup,
+        mesh: &MeshBuffers,
+    ) {
+        let clear = |view, color: wgpu::Color| {
+            Some(wgpu::RenderPassColorAttachment {
+                view,
+                depth_slice: None,
+                resolve_target: None,
+                ops: wgpu::Operations { load: wgpu::LoadOp::Clear(color), store: wgpu::StoreOp::Store },
+            })
+        };
+        let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+            label: Some(LABEL),
+            color_attachments: &[
+                // Distance −1 marks "no surface": it can never pass the reprojection test.
+                clear(targets.normal_distance, wgpu::Color { r: 0.0, g: 0.0, b: 0.0, a: -1.0 }),
+                clear(targets.albedo, wgpu::Color::TRANSPARENT),
+                clear(targets.previous, wgpu::Color { r: -1e9, g: -1e9, b: 0.0, a: 0.0 }),
+            ],
+            depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+                view: targets.depth,
+                depth_ops: Some(wgpu::Operations { load: wgpu::LoadOp::Clear(1.0), store: wgpu::StoreOp::Store }),
+                stencil_ops: None,
+            }),
+            timestamp_writes: None,
+            occlusion_query_set: None,
+            multiview_mask: None,
+        });
+        pass.set_pipeline(&self.pipeline);
+        pass.set_bind_group(0, bind_group, &[]);
+        pass.set_vertex_buffer(0, mesh.vertices.slice(..));
+        pass.set_index_buffer(mesh.indices.slice(..), wgpu::IndexFormat::Uint32);
+        pass.draw_indexed(0..mesh.index_count, 0, 0..1);
+    }
+}

@@ -1,0 +1,47 @@
+//! Shading pass: the frame's shading where it is needed, either over the compacted list
+//! (indirect dispatch, cost ∝ samples) or over the whole frame with a mask.
+
+use crate::render::gpu::{self, FLOAT, UINT};
+
+pub const SHADER: &str = include_str!("../../../shaders/shade.wgsl");
+pub const LABEL: &str = "shade";
+
+pub struct ShadePass {
+    list: wgpu::ComputePipeline,
+    grid: wgpu::ComputePipeline,
+    pub layout: wgpu::BindGroupLayout,
+}
+
+impl ShadePass {
+    pub fn new(device: &wgpu::Device) -> ShadePass {
+        let module = gpu::shader(device, LABEL, SHADER);
+        let layout = gpu::layout(
+            device,
+            LABEL,
+            &[
+                gpu::uniform(0, false),
+                gpu::texture(1, FLOAT),
+                gpu::texture(2, FLOAT),
+                gpu::texture(3, UINT),
+                gpu::storage_buffer(4, true),
+                gpu::storage_buffer(5, true),
+                gpu::storage_texture(6, wgpu::TextureFormat::Rgba16Float),
+            ],
+        );
+        let list = gpu::compute_pipeline(device, "shade.list", &module, "shade_list", &layout);
+        let grid = gpu::compute_pipeline(device, "shade.grid", &module, "shade_grid", &layout);
+        ShadePass { list, grid, layout }
+    }
+
+    /// Shades the listed pixels; the workgroup count comes from `counter[1..4]`.
+    pub fn encode_list(&self, encoder: &mut wgpu::CommandEncoder, bind_group: &wgpu::BindGroup, counter: &wgpu::Buffer) {
+        let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor { label: Some(LABEL), timestamp_writes: None });
+        pass.set_pipeline(&self.list);
+        pass.set_bind_group(0, bind_group, &[]);
+        pass.dispatch_workgroups_indirect(counter, 4);
+    }
+
+    pub fn encode_grid(&self, encoder: &mut wgpu::CommandEncoder, bind_group: &wgpu::BindGroup, size: (u32, u32)) {
+        gpu::dispatch_frame(encoder, LABEL, &self.grid, bind_group, size);
+    }
+}
