@@ -89,6 +89,7 @@ fn saliency(p: vec2<i32>) -> f32 {
     // Sobel weights sum to 8 across the kernel: /8 gives a per-pixel derivative.
     let d_lab = sqrt(gx_lab * gx_lab + gy_lab * gy_lab) / 8.0;
     let d_n = sqrt(gx_n * gx_n + gy_n * gy_n) / 8.0;
+    // Normalisers: optics::saliency::{ALBEDO_FULL, NORMAL_FULL}.
     let d_albedo = max(d_lab.x, max(d_lab.y, d_lab.z)) / 10.0;
     let d_normal = max(d_n.x, max(d_n.y, d_n.z)) / 0.25;
     return clamp(max(d_albedo, d_normal), 0.0, 1.0);

@@ -4,3 +4,4 @@
 pub mod color;
 pub mod shading;
 pub mod acuity;
+pub mod saliency;
