@@ -17,14 +17,17 @@ fn median(v: &mut [f64]) -> f64 {
 #[tokio::main]
 async fn main() -> Result<()> {
     let args: Vec<String> = std::env::args().skip(1).collect();
-    let [url, w, h, n] = args.as_slice() else {
-        bail!("usage: frame_times WS_URL WIDTH HEIGHT FRAMES");
+    let (url, w, h, n, preset) = match args.as_slice() {
+        [url, w, h, n] => (url, w, h, n, "balanced"),
+        [url, w, h, n, preset] => (url, w, h, n, preset.as_str()),
+        _ => bail!("usage: frame_times WS_URL WIDTH HEIGHT FRAMES [PRESET]"),
     };
     let (width, height, frames): (u32, u32, usize) = (w.parse()?, h.parse()?, n.parse()?);
     let mut c = Client::connect(url).await?;
-    let welcome = c.hello(&Hello { width, height, max_in_flight: 1, ..Hello::default() }).await?;
+    let welcome = c.hello(&Hello { width, height, max_in_flight: 1, preset: preset.into(), ..Hello::default() }).await?;
     let clock = Instant::now();
-    let (mut render, mut readback, mut encode, mut queue, mut round_trip) = (vec![], vec![], vec![], vec![], vec![]);
+    let (mut render, mut readback, mut encode, mut queue, mut round_trip, mut sampled) =
+        (vec![], vec![], vec![], vec![], vec![], vec![]);
     const WARM_UP: u64 = 10;
     for seq in 1..=frames as u64 + WARM_UP {
         // Sweep the gaze across the frame so every frame differs.
@@ -45,13 +48,15 @@ async fn main() -> Result<()> {
             readback.push(header.stages_ms.readback);
             encode.push(header.stages_ms.encode);
             queue.push(header.stages_ms.queue);
+            sampled.push(header.sampled);
             round_trip.push(clock.elapsed().as_secs_f64() * 1e3 - t_ms);
         }
     }
     println!("adapter: {}", welcome.adapter);
     println!(
-        "{width}x{height}, {} frames, medians (ms): queue {:.2}  render {:.2}  readback {:.2}  encode {:.2}  gaze-to-frame-received {:.2}",
+        "{width}x{height} {preset}, {} frames, medians: sampled {:.3}, queue {:.2} ms  render {:.2} ms  readback {:.2} ms  encode {:.2} ms  gaze-to-frame-received {:.2} ms",
         render.len(),
+        median(&mut sampled),
         median(&mut queue),
         median(&mut render),
         median(&mut readback),

@@ -9,6 +9,7 @@
 @group(0) @binding(2) var nearest_tex: texture_2d<u32>;
 @group(0) @binding(3) var albedo_tex: texture_2d<f32>;
 @group(0) @binding(4) var out_resolved: texture_storage_2d<rgba16float, write>;
+@group(0) @binding(5) var normal_distance: texture_2d<f32>;
 
 fn covered(p: vec2<i32>) -> bool {
     return textureLoad(albedo_tex, p, 0).a > 0.5;
@@ -34,9 +35,10 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
     }
     let s = textureLoad(nearest_tex, p, 0).r;
     if (s == NO_SEED) {
-        // Nothing shaded anywhere on the object: ambient-only albedo, finite and plausible.
+        // No sample within jump-flooding reach (a sliver of the object far from every sample):
+        // shade the pixel itself. Rare by construction of the reach, so cheap.
         let a = textureLoad(albedo_tex, p, 0).rgb;
-        textureStore(out_resolved, p, vec4<f32>(a * frame.light.rgb * frame.albedo_ambient.w, 1.0));
+        textureStore(out_resolved, p, vec4<f32>(lambert(textureLoad(normal_distance, p, 0).xyz, a), 1.0));
         return;
     }
     let d2 = seed_dist2(s, p);

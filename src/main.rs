@@ -272,13 +272,28 @@ fn render(request: FrameRequest, out: &std::path::Path, quality: u8, frames: u32
     let mut renderer = Renderer::new().context("opening the GPU")?;
     eprintln!("adapter: {}", renderer.adapter());
     let mut frame = renderer.render(&request).with_context(|| format!("rendering scene {:?}", request.scene))?;
+    let mut times = Vec::new();
     for _ in 1..frames {
         frame = renderer.render(&request).with_context(|| format!("rendering scene {:?}", request.scene))?;
+        times.push(frame.render_ms);
+    }
+    if times.len() >= 3 {
+        times.sort_by(|a, b| a.total_cmp(b));
+        eprintln!(
+            "render ms over frames 2..{frames}: median {:.2}, min {:.2}, max {:.2}",
+            times[times.len() / 2],
+            times[0],
+            times[times.len() - 1]
+        );
     }
     let started = std::time::Instant::now();
     let bytes = fovea::encode::encode(&frame.rgba, frame.width, frame.height, codec, quality)?;
     let encode_ms = started.elapsed().as_secs_f64() * 1e3;
     std::fs::write(out, &bytes).with_context(|| format!("writing {}", out.display()))?;
+    if !frame.passes_ms.is_empty() {
+        let passes: Vec<String> = frame.passes_ms.iter().map(|(k, v)| format!("{k} {v:.2}")).collect();
+        eprintln!("GPU ms per pass: {}", passes.join(", "));
+    }
     eprintln!(
         "wrote {} ({}x{}, {} bytes, preset {}, sampled {:.1}%): render {:.2} ms, readback {:.2} ms, encode {:.2} ms",
         out.display(),

@@ -1,7 +1,7 @@
 //! The foveated path on the GPU, held to its CPU twins and pushed to its extremes.
 
 use fovea::foveation::rank_map;
-use fovea::foveation::reconstruct::{jfa, reconstruct, unpack, NO_SEED};
+use fovea::foveation::reconstruct::{jfa_with_steps, reconstruct, unpack, NO_SEED};
 use fovea::foveation::{Noise, Reconstruction, Settings};
 use fovea::optics::acuity::{acuity_probability, mar_deg, ProbabilityForm, Viewing};
 use fovea::render::uniforms::{FLAG_COVERED, FLAG_REUSED, FLAG_SAMPLED};
@@ -99,7 +99,8 @@ fn gpu_jump_flooding_and_resolve_match_the_cpu_twins() {
         req.stream = 7;
         r.render(&req).unwrap();
         let img = inspect(&r, &req);
-        let cpu_nearest = jfa(w, h, &img.seeds);
+        let steps = req.settings.foveation.jfa_steps(w, h, fovea::render::MIN_XI);
+        let cpu_nearest = jfa_with_steps(w, h, &img.seeds, &steps);
         assert_eq!(img.nearest, cpu_nearest, "JFA: GPU and CPU differ");
         let covered: Vec<bool> = img.flags.iter().map(|f| f & FLAG_COVERED != 0).collect();
         let window = (reconstruction == Reconstruction::Sibson).then(|| req.settings.foveation.sibson_max_window());

@@ -103,7 +103,7 @@ async fn two_sessions_each_get_frames_that_answer_their_own_gaze() {
         assert_eq!((da.width(), da.height()), (96, 64));
         assert_eq!((db.width(), db.height()), (80, 80));
         assert!(ha.stages_ms.render > 0.0 && ha.stages_ms.encode > 0.0);
-        assert_eq!(ha.sampled, 1.0);
+        assert!(ha.sampled > 0.0 && ha.sampled <= 1.0, "sampled {}", ha.sampled);
         frames_a += 1;
         frames_b += 1;
     }
@@ -186,7 +186,7 @@ async fn credits_pace_frames_and_newest_gaze_wins() {
 async fn png_frames_are_exactly_the_rendered_pixels() {
     let server = Server::start().await;
     let mut c = server.client().await;
-    c.hello(&Hello { codec: Codec::Png, ..hello(72, 40) }).await.unwrap();
+    c.hello(&Hello { codec: Codec::Png, preset: "full".into(), ..hello(72, 40) }).await.unwrap();
     let (h, png) = frame_for(&mut c, gaze(3, 0.25, 0.75)).await;
     assert_eq!(h.codec, Codec::Png);
     let streamed = image::load_from_memory(&png).unwrap().to_rgba8().into_raw();
@@ -195,6 +195,38 @@ async fn png_frames_are_exactly_the_rendered_pixels() {
     req.marker = true;
     let direct = Renderer::new().unwrap().render(&req).unwrap().rgba;
     assert!(streamed == direct, "PNG frame differs from a direct render of the same request");
+    server.stop().await;
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn settings_change_the_sampling_live_and_bad_settings_are_refused() {
+    let server = Server::start().await;
+    let mut c = server.client().await;
+    // Large enough that the periphery is finer than the eye resolves (at 96×72 on a 53 cm
+    // display every pixel is coarser than the fovea's MAR, and every pixel is needed).
+    let w = c.hello(&Hello { preset: "full".into(), ..hello(320, 240) }).await.unwrap();
+    assert!(w.presets.iter().any(|p| p == "balanced") && w.presets.iter().any(|p| p == "reference"));
+    let (h, _) = frame_for(&mut c, gaze(1, 0.5, 0.5)).await;
+    assert_eq!(h.sampled, 1.0, "full shades every pixel");
+    c.send_text(r#"{"type":"settings","preset":"fast"}"#).await.unwrap();
+    let (h, _) = frame_for(&mut c, gaze(2, 0.5, 0.5)).await;
+    assert!(h.sampled > 0.0 && h.sampled < 0.5, "fast shades a fraction: {}", h.sampled);
+    c.send_text(r#"{"type":"settings","min_probability":1.0}"#).await.unwrap();
+    let (h3, _) = frame_for(&mut c, gaze(3, 0.5, 0.5)).await;
+    assert!(h3.sampled > h.sampled, "ξ = 1 shades every covered pixel: {} vs {}", h3.sampled, h.sampled);
+    let cases: &[(&str, ErrorCode)] = &[
+        (r#"{"type":"settings","preset":"ultra"}"#, ErrorCode::UnknownPreset),
+        (r#"{"type":"settings","mar_slope":-1}"#, ErrorCode::OutOfRange),
+        (r#"{"type":"settings","min_probability":2}"#, ErrorCode::OutOfRange),
+        (r#"{"type":"settings","warp_drive":true}"#, ErrorCode::BadField),
+        (r#"{"type":"settings","noise":"pink"}"#, ErrorCode::BadField),
+    ];
+    for (text, code) in cases {
+        c.send_text(text).await.unwrap();
+        assert_eq!(next_error(&mut c).await, *code, "for {text}");
+    }
+    let (h, _) = frame_for(&mut c, gaze(4, 0.2, 0.2)).await;
+    assert_eq!(h.seq, Some(4), "the session survives bad settings");
     server.stop().await;
 }
 

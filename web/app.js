@@ -10,6 +10,10 @@ const statusEl = document.getElementById('status');
 const sceneSel = document.getElementById('scene');
 const sizeSel = document.getElementById('size');
 const codecSel = document.getElementById('codec');
+const presetSel = document.getElementById('preset');
+const overlaySel = document.getElementById('overlay-mode');
+const dofBox = document.getElementById('dof');
+const pupilRange = document.getElementById('pupil');
 
 // Exposed for people poking in the console and for the browser test.
 const state = {
@@ -50,9 +54,10 @@ function connect() {
   setStatus('connecting…', 'connecting');
   ws.onopen = () => {
     send({
-      type: 'hello', v: 1, scene: sceneSel.value, width, height, preset: 'full',
+      type: 'hello', v: 1, scene: sceneSel.value, width, height, preset: presetSel.value,
       codec: codecSel.value, quality: 85, max_in_flight: 2,
     });
+    sendSettings();
   };
   ws.onmessage = (ev) => (typeof ev.data === 'string' ? onText(ev.data) : onFrame(ev.data));
   ws.onclose = (ev) => {
@@ -70,6 +75,8 @@ function onText(text) {
     document.getElementById('adapter').textContent = `GPU: ${msg.adapter}`;
     const current = sceneSel.value;
     sceneSel.replaceChildren(...msg.scenes.map((name) => new Option(name, name, false, name === current)));
+    const preset = presetSel.value;
+    presetSel.replaceChildren(...msg.presets.map((name) => new Option(name, name, false, name === preset)));
   } else if (msg.type === 'error') {
     state.errors.push(msg);
     console.warn(`server error ${msg.code}: ${msg.message}`);
@@ -127,15 +134,28 @@ function draw() {
   overlay.textContent = overlayText(state.stats, frame.header, now);
 }
 
+// Knobs that change live, without reconnecting.
+function sendSettings() {
+  send({ type: 'settings', preset: presetSel.value, overlay: overlaySel.value, dof: dofBox.checked });
+}
+
+let lastGaze = { x: 0.5, y: 0.5 };
+function sendGaze(x, y) {
+  lastGaze = { x, y };
+  send({ type: 'gaze', seq: ++state.seq, t_ms: performance.now(), x, y, pupil_mm: Number(pupilRange.value) });
+}
+
 canvas.addEventListener('mousemove', (ev) => {
   const r = canvas.getBoundingClientRect();
   const clamp = (v) => Math.min(1, Math.max(0, v));
-  send({
-    type: 'gaze', seq: ++state.seq, t_ms: performance.now(),
-    x: clamp((ev.clientX - r.left) / r.width), y: clamp((ev.clientY - r.top) / r.height), pupil_mm: 4.0,
-  });
+  sendGaze(clamp((ev.clientX - r.left) / r.width), clamp((ev.clientY - r.top) / r.height));
 });
 
+pupilRange.addEventListener('input', () => {
+  document.getElementById('pupil-mm').textContent = Number(pupilRange.value).toFixed(1);
+  sendGaze(lastGaze.x, lastGaze.y);
+});
+for (const el of [presetSel, overlaySel, dofBox]) el.addEventListener('change', sendSettings);
 for (const sel of [sceneSel, sizeSel, codecSel]) sel.addEventListener('change', connect);
 setInterval(() => {
   overlay.textContent = overlayText(state.stats, state.lastHeader, performance.now());

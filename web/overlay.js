@@ -37,7 +37,8 @@ export function overlayText(stats, header, nowMs) {
   if (header) {
     const s = header.stages_ms;
     lines.push(`server queue ${ms(s.queue)} render ${ms(s.render)} readback ${ms(s.readback)} encode ${ms(s.encode)}`);
-    lines.push(`frame ${header.frame}  ${header.width}×${header.height} ${header.codec}  gaze ${header.gaze.x.toFixed(3)}, ${header.gaze.y.toFixed(3)}`);
+    lines.push(`frame ${header.frame}  ${header.width}×${header.height} ${header.codec}  shaded ${(100 * header.sampled).toFixed(1)}%`);
+    lines.push(`gaze ${header.gaze.x.toFixed(3)}, ${header.gaze.y.toFixed(3)}`);
   }
   return lines.join('\n');
 }

@@ -27,9 +27,18 @@ fn dist2(s: u32, x: i32, y: i32) -> i64 {
 /// Jump sizes: N/2, N/4, …, 1 with N the power of two ≥ the larger side, then one more pass of
 /// step 1 ("JFA+1", Rong & Tan 2006), which removes most of plain JFA's rare errors.
 pub fn jfa_steps(width: u32, height: u32) -> Vec<u32> {
+    jfa_steps_within(width, height, u32::MAX)
+}
+
+/// Like [`jfa_steps`], but starting no higher than needed to reach a seed `max_gap` pixels away:
+/// when sampling guarantees a seed at least that close, the long jumps find nothing new.
+/// Pixels farther than the reach are left without a seed (the resolve pass shades them).
+pub fn jfa_steps_within(width: u32, height: u32, max_gap: u32) -> Vec<u32> {
     let n = width.max(height).max(1).next_power_of_two();
+    // The first jump reaches max_gap: the smallest power of two ≥ it (at least 2).
+    let reach = max_gap.max(2).checked_next_power_of_two().unwrap_or(n);
     let mut steps = Vec::new();
-    let mut k = n / 2;
+    let mut k = (n / 2).min(reach);
     while k >= 1 {
         steps.push(k);
         k /= 2;
@@ -69,7 +78,19 @@ pub fn jfa_pass(width: u32, height: u32, step: u32, seeds: &[u32]) -> Vec<u32> {
 
 /// Nearest seed of every pixel by jump flooding.
 pub fn jfa(width: u32, height: u32, seeds: &[u32]) -> Vec<u32> {
-    jfa_steps(width, height).into_iter().fold(seeds.to_vec(), |s, k| jfa_pass(width, height, k, &s))
+    jfa_with_steps(width, height, seeds, &jfa_steps(width, height))
+}
+
+pub fn jfa_with_steps(width: u32, height: u32, seeds: &[u32], steps: &[u32]) -> Vec<u32> {
+    steps.iter().fold(seeds.to_vec(), |s, &k| jfa_pass(width, height, k, &s))
+}
+
+/// The largest distance to the nearest seed that sampling at minimum probability ξ leaves,
+/// with margin: blue noise at density ξ keeps holes below about 1.5 sample spacings (1/√ξ);
+/// twice the spacing is used.
+pub fn max_gap_for(xi: f32) -> u32 {
+    let xi = xi.clamp(1e-6, 1.0);
+    (2.0 / xi.sqrt()).ceil() as u32
 }
 
 /// Nearest seed of every pixel by exhaustive search: the ground truth JFA is tested against.

@@ -72,6 +72,18 @@ impl Foveation {
         compaction: true,
     };
 
+    /// Jump sizes of the JFA passes for a frame (fewer when ξ bounds the holes). The count
+    /// keeps the parity of the full list so the result lands in the same texture.
+    pub fn jfa_steps(&self, width: u32, height: u32, min_xi: f32) -> Vec<u32> {
+        use super::reconstruct::{jfa_steps, jfa_steps_within, max_gap_for};
+        let full = jfa_steps(width, height);
+        let mut steps = jfa_steps_within(width, height, max_gap_for(self.min_probability.max(min_xi)));
+        if steps.len() % 2 != full.len() % 2 {
+            steps.push(1);
+        }
+        steps
+    }
+
     /// The Sibson window bound actually used.
     pub fn sibson_max_window(&self) -> u32 {
         if self.sibson_window > 0 {

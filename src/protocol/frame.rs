@@ -38,6 +38,9 @@ pub struct FrameHeader {
     /// Fraction of pixels shaded this frame (1.0 without foveation).
     pub sampled: f64,
     pub stages_ms: StageTimes,
+    /// GPU milliseconds per render pass, where the adapter has timestamp queries.
+    #[serde(default, skip_serializing_if = "std::collections::BTreeMap::is_empty")]
+    pub passes_ms: std::collections::BTreeMap<String, f64>,
 }
 
 /// Packs `[u32 LE header length][JSON header][image bytes]`.
@@ -88,6 +91,7 @@ mod tests {
             codec: Codec::Png,
             sampled: 1.0,
             stages_ms: StageTimes { queue: 0.1, render: 2.0, readback: 0.5, encode: 1.25 },
+            passes_ms: [("shade".to_string(), 0.75)].into_iter().collect(),
         };
         let image = [0xFFu8, 0xD8, 0x01, 0x02];
         let bytes = encode_frame(&header, &image);

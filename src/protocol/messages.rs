@@ -59,7 +59,7 @@ fn default_height() -> u32 {
     480
 }
 fn default_preset() -> String {
-    "full".to_string()
+    "balanced".to_string()
 }
 fn default_quality() -> u8 {
     85

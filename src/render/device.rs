@@ -42,9 +42,12 @@ impl Gpu {
         }
         let adapter = chosen.ok_or_else(|| RenderError::NoAdapter(format!("tried backends {tried:?}")))?;
         let info = adapter.get_info();
+        // Timestamps time each pass; without them only whole frames are timed.
+        let required_features = adapter.features() & wgpu::Features::TIMESTAMP_QUERY;
         let (device, queue) = adapter
             .request_device(&wgpu::DeviceDescriptor {
                 label: Some("fovea"),
+                required_features,
                 required_limits: wgpu::Limits::default(),
                 ..Default::default()
             })

@@ -1,6 +1,8 @@
 //! Small helpers every pass uses: shader composition, bind group layout entries, pipelines and
 //! dispatch, so pass files hold only what is particular to them.
 
+use super::timer::PassTimer;
+
 pub const COMMON: &str = include_str!("../../shaders/common.wgsl");
 
 /// A pass's WGSL with the shared prelude (frame uniforms, helpers) in front.
@@ -115,12 +117,13 @@ pub fn compute_pipeline(
 /// One compute pass over the frame in 8×8 tiles.
 pub fn dispatch_frame(
     encoder: &mut wgpu::CommandEncoder,
-    label: &str,
+    label: &'static str,
     pipeline: &wgpu::ComputePipeline,
     bind_group: &wgpu::BindGroup,
     size: (u32, u32),
+    timer: &mut PassTimer,
 ) {
-    let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor { label: Some(label), timestamp_writes: None });
+    let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor { label: Some(label), timestamp_writes: timer.compute(label) });
     pass.set_pipeline(pipeline);
     pass.set_bind_group(0, bind_group, &[]);
     pass.dispatch_workgroups(size.0.div_ceil(8), size.1.div_ceil(8), 1);
@@ -173,7 +176,7 @@ impl FramePass {
         bind(device, self.label, &self.layout, resources)
     }
 
-    pub fn encode(&self, encoder: &mut wgpu::CommandEncoder, bind_group: &wgpu::BindGroup, size: (u32, u32)) {
-        dispatch_frame(encoder, self.label, &self.pipeline, bind_group, size);
+    pub fn encode(&self, encoder: &mut wgpu::CommandEncoder, bind_group: &wgpu::BindGroup, size: (u32, u32), timer: &mut PassTimer) {
+        dispatch_frame(encoder, self.label, &self.pipeline, bind_group, size, timer);
     }
 }

@@ -13,6 +13,7 @@ pub mod pass;
 mod renderer;
 mod targets;
 mod thread;
+pub mod timer;
 pub mod uniforms;
 
 pub use device::Gpu;

@@ -11,6 +11,7 @@ use super::pass::marker::MarkerPass;
 use super::pass::shade::ShadePass;
 use super::pass::{dof, output, resolve, sampling};
 use super::targets::{map_read, FrameTargets};
+use super::timer::PassTimer;
 use super::uniforms::*;
 use super::{Gpu, RenderError};
 use crate::foveation::rank_map;
@@ -80,6 +81,8 @@ pub struct RenderedFrame {
     pub sampled: f64,
     pub render_ms: f64,
     pub readback_ms: f64,
+    /// GPU milliseconds per pass label (empty without timestamp queries).
+    pub passes_ms: std::collections::BTreeMap<String, f64>,
 }
 
 /// Intermediate images of the last frame of a stream, for tests and diagnostics.
@@ -115,6 +118,7 @@ pub struct Renderer {
     rank_map: wgpu::TextureView,
     scenes: HashMap<String, (Scene, MeshBuffers)>,
     targets: Vec<(TargetKey, FrameTargets)>,
+    timer: PassTimer,
 }
 
 impl Renderer {
@@ -149,7 +153,8 @@ impl Renderer {
             wgpu::TexelCopyBufferLayout { offset: 0, bytes_per_row: Some(side * 4), rows_per_image: Some(side) },
             wgpu::Extent3d { width: side, height: side, depth_or_array_layers: 1 },
         );
-        Renderer { passes, rank_map: gpu::view(&rank), gpu, scenes: HashMap::new(), targets: Vec::new() }
+        let timer = PassTimer::new(d, &gpu.queue);
+        Renderer { passes, rank_map: gpu::view(&rank), gpu, scenes: HashMap::new(), targets: Vec::new(), timer }
     }
 
     pub fn adapter(&self) -> String {
@@ -197,40 +202,46 @@ impl Renderer {
         let targets = GBufferTargets { normal_distance: &nd, albedo: &albedo, previous: &previous, depth: &t.depth };
         let p = &self.passes;
         let size = (w, h);
-        p.gbuffer.encode(&mut encoder, &targets, &t.bind.gbuffer, mesh);
+        let timer = &mut self.timer;
+        timer.begin_frame();
+        p.gbuffer.encode(&mut encoder, &targets, &t.bind.gbuffer, mesh, timer);
         if fov.enabled {
             encoder.clear_buffer(&t.counter, 0, None);
-            p.sampling.encode(&mut encoder, &t.bind.sampling, size);
+            p.sampling.encode(&mut encoder, &t.bind.sampling, size, timer);
             if fov.compaction {
-                p.compact.encode(&mut encoder, &t.bind.compact, size);
-                p.shade.encode_list(&mut encoder, &t.bind.shade, &t.counter);
+                p.compact.encode(&mut encoder, &t.bind.compact, size, timer);
+                p.shade.encode_list(&mut encoder, &t.bind.shade, &t.counter, timer);
             } else {
-                p.shade.encode_grid(&mut encoder, &t.bind.shade, size);
+                p.shade.encode_grid(&mut encoder, &t.bind.shade, size, timer);
             }
-            let jfa: Vec<&wgpu::BindGroup> = t.bind.jfa.iter().collect();
-            p.jfa.encode(&mut encoder, &jfa, size);
+            let steps = fov.jfa_steps(w, h, MIN_XI);
+            t.write_jfa_steps(queue, &steps);
+            let jfa: Vec<&wgpu::BindGroup> = t.bind.jfa.iter().take(steps.len()).collect();
+            p.jfa.encode(&mut encoder, &jfa, size, timer);
         } else {
-            p.shade.encode_grid(&mut encoder, &t.bind.shade, size);
+            p.shade.encode_grid(&mut encoder, &t.bind.shade, size, timer);
         }
-        p.resolve.encode(&mut encoder, &t.bind.resolve, size);
+        p.resolve.encode(&mut encoder, &t.bind.resolve, size, timer);
         if settings.dof {
-            p.dof.encode(&mut encoder, &t.bind.dof, size);
-            p.output.encode(&mut encoder, &t.bind.output_dof, size);
+            p.dof.encode(&mut encoder, &t.bind.dof, size, timer);
+            p.output.encode(&mut encoder, &t.bind.output_dof, size, timer);
         } else {
-            p.output.encode(&mut encoder, &t.bind.output_resolved, size);
+            p.output.encode(&mut encoder, &t.bind.output_resolved, size, timer);
         }
         if req.marker {
-            p.marker.encode(queue, &mut encoder, &t.final_view, size, req.gaze);
+            p.marker.encode(queue, &mut encoder, &t.final_view, size, req.gaze, timer);
         }
         t.keep_history(&mut encoder);
+        timer.resolve(&mut encoder);
         let submission = queue.submit([encoder.finish()]);
         device
-            .poll(wgpu::PollType::Wait { submission_index: Some(submission), timeout: None })
+            .poll(wgpu::PollType::Wait { submission_index: Some(submission.clone()), timeout: None })
             .map_err(|e| RenderError::Gpu(format!("waiting for the frame: {e}")))?;
         if let Some(e) = pollster::block_on(scope.pop()) {
             return Err(RenderError::Gpu(e.to_string()));
         }
         let render_ms = started.elapsed().as_secs_f64() * 1e3;
+        let passes_ms = self.timer.read(device, submission)?;
 
         let started = Instant::now();
         let (rgba, count) = t.read_back(device, queue)?;
@@ -243,7 +254,7 @@ impl Renderer {
         t.prev_eye = Vec3::from(camera.eye);
         t.has_history = true;
         t.frame_index = t.frame_index.wrapping_add(1);
-        Ok(RenderedFrame { width: w, height: h, rgba, sampled, render_ms, readback_ms })
+        Ok(RenderedFrame { width: w, height: h, rgba, sampled, render_ms, readback_ms, passes_ms })
     }
 
     /// Reads back the intermediate images of a stream's last frame.

@@ -103,14 +103,9 @@ impl FrameTargets {
         let list = buffer("compact.list", u64::from(width) * u64::from(height) * 4, B::STORAGE);
         let counter = buffer("compact.counter", 16, B::STORAGE | B::INDIRECT | B::COPY_SRC | B::COPY_DST);
         let steps = jfa_steps(width, height);
+        // Room for the longest step list; each frame writes the steps it runs.
         let jump = buffer("jfa.steps", jfa::SLOT * steps.len() as u64, B::UNIFORM | B::COPY_DST);
-        // Jump sizes depend on the frame size only: written once.
-        let mut jumps = vec![0u8; jump.size() as usize];
-        for (i, s) in steps.iter().enumerate() {
-            let at = i * jfa::SLOT as usize;
-            jumps[at..at + 4].copy_from_slice(&s.to_le_bytes());
-        }
-        queue.write_buffer(&jump, 0, &jumps);
+        let _ = queue;
         let align = wgpu::COPY_BYTES_PER_ROW_ALIGNMENT;
         let padded_row = (width * 4).div_ceil(align) * align;
         let readback = buffer("output.readback", u64::from(padded_row) * u64::from(height), B::COPY_DST | B::MAP_READ);
@@ -147,7 +142,7 @@ impl FrameTargets {
             })
             .collect();
         let nearest = if steps.len() % 2 == 1 { &ja } else { &jb };
-        let resolve = passes.resolve.bind(device, &[u.clone(), T(&col), T(nearest), T(&alb), T(&res)]);
+        let resolve = passes.resolve.bind(device, &[u.clone(), T(&col), T(nearest), T(&alb), T(&res), T(&nd)]);
         let dof_bg = passes.dof.bind(device, &[u.clone(), T(&res), T(&nd), T(&dv)]);
         let output_resolved = passes.output.bind(device, &[u.clone(), T(&res), T(&fl), T(&prob), T(&fin)]);
         let output_dof = passes.output.bind(device, &[u.clone(), T(&dv), T(&fl), T(&prob), T(&fin)]);
@@ -193,6 +188,16 @@ impl FrameTargets {
             frame_index: 0,
             _jump: jump,
         }
+    }
+
+    /// Writes this frame's jump sizes, one per uniform slot.
+    pub fn write_jfa_steps(&self, queue: &wgpu::Queue, steps: &[u32]) {
+        let mut bytes = vec![0u8; steps.len() * jfa::SLOT as usize];
+        for (i, s) in steps.iter().enumerate() {
+            let at = i * jfa::SLOT as usize;
+            bytes[at..at + 4].copy_from_slice(&s.to_le_bytes());
+        }
+        queue.write_buffer(&self._jump, 0, &bytes);
     }
 
     /// The texture holding each pixel's nearest seed after jump flooding.

@@ -267,6 +267,7 @@ async fn make_frame(state: Arc<ServerState>, job: FrameJob) -> Result<Vec<u8>, P
     let (codec, quality) = (job.hello.codec, job.hello.quality);
     let (w, h) = (frame.width, frame.height);
     let (render_ms, readback_ms, sampled) = (frame.render_ms, frame.readback_ms, frame.sampled);
+    let passes_ms = frame.passes_ms;
     let rgba = frame.rgba;
     let encoded = tokio::task::spawn_blocking(move || {
         let started = Instant::now();
@@ -291,6 +292,7 @@ async fn make_frame(state: Arc<ServerState>, job: FrameJob) -> Result<Vec<u8>, P
             readback: readback_ms,
             encode: encode_time.as_secs_f64() * 1e3,
         },
+        passes_ms,
     };
     Ok(encode_frame(&header, &image))
 }

@@ -2,6 +2,7 @@
 //! CSR reordering), and the count becomes the indirect dispatch of the shading pass.
 
 use crate::render::gpu::{self, UINT};
+use crate::render::timer::PassTimer;
 
 pub const SHADER: &str = include_str!("../../../shaders/compact.wgsl");
 pub const LABEL: &str = "compact";
@@ -26,10 +27,12 @@ impl CompactPass {
     }
 
     /// `counter` must be zeroed before this runs (the caller clears it in the same encoder).
-    pub fn encode(&self, encoder: &mut wgpu::CommandEncoder, bind_group: &wgpu::BindGroup, size: (u32, u32)) {
-        gpu::dispatch_frame(encoder, LABEL, &self.compact, bind_group, size);
-        let mut pass =
-            encoder.begin_compute_pass(&wgpu::ComputePassDescriptor { label: Some("compact.indirect_args"), timestamp_writes: None });
+    pub fn encode(&self, encoder: &mut wgpu::CommandEncoder, bind_group: &wgpu::BindGroup, size: (u32, u32), timer: &mut PassTimer) {
+        gpu::dispatch_frame(encoder, LABEL, &self.compact, bind_group, size, timer);
+        let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+            label: Some("compact.indirect_args"),
+            timestamp_writes: timer.compute(LABEL),
+        });
         pass.set_pipeline(&self.args);
         pass.set_bind_group(0, bind_group, &[]);
         pass.dispatch_workgroups(1, 1, 1);

@@ -4,6 +4,7 @@
 use wgpu::util::DeviceExt;
 
 use crate::render::gpu;
+use crate::render::timer::PassTimer;
 use crate::scene::Scene;
 
 pub const SHADER: &str = include_str!("../../../shaders/gbuffer.wgsl");
@@ -113,6 +114,7 @@ impl GBufferPass {
         targets: &GBufferTargets,
         bind_group: &wgpu::BindGroup,
         mesh: &MeshBuffers,
+        timer: &mut PassTimer,
     ) {
         let clear = |view, color: wgpu::Color| {
             Some(wgpu::RenderPassColorAttachment {
@@ -135,7 +137,7 @@ impl GBufferPass {
                 depth_ops: Some(wgpu::Operations { load: wgpu::LoadOp::Clear(1.0), store: wgpu::StoreOp::Store }),
                 stencil_ops: None,
             }),
-            timestamp_writes: None,
+            timestamp_writes: timer.render(LABEL),
             occlusion_query_set: None,
             multiview_mask: None,
         });

@@ -3,6 +3,8 @@
 
 use bytemuck::{Pod, Zeroable};
 
+use crate::render::timer::PassTimer;
+
 pub const SHADER: &str = include_str!("../../../shaders/marker.wgsl");
 pub const LABEL: &str = "marker";
 
@@ -96,6 +98,7 @@ impl MarkerPass {
         color: &wgpu::TextureView,
         size: (u32, u32),
         gaze: [f32; 2],
+        timer: &mut PassTimer,
     ) {
         let (radius, thickness) = marker_size(size.0, size.1);
         let centre = [gaze[0] * size.0 as f32, gaze[1] * size.1 as f32];
@@ -110,7 +113,7 @@ impl MarkerPass {
                 ops: wgpu::Operations { load: wgpu::LoadOp::Load, store: wgpu::StoreOp::Store },
             })],
             depth_stencil_attachment: None,
-            timestamp_writes: None,
+            timestamp_writes: timer.render(LABEL),
             occlusion_query_set: None,
             multiview_mask: None,
         });

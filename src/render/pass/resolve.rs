@@ -16,6 +16,7 @@ pub fn new(device: &wgpu::Device) -> FramePass {
             gpu::texture(2, UINT),
             gpu::texture(3, FLOAT),
             gpu::storage_texture(4, wgpu::TextureFormat::Rgba16Float),
+            gpu::texture(5, FLOAT),
         ],
     )
 }

@@ -2,6 +2,7 @@
 //! (indirect dispatch, cost ∝ samples) or over the whole frame with a mask.
 
 use crate::render::gpu::{self, FLOAT, UINT};
+use crate::render::timer::PassTimer;
 
 pub const SHADER: &str = include_str!("../../../shaders/shade.wgsl");
 pub const LABEL: &str = "shade";
@@ -34,14 +35,20 @@ impl ShadePass {
     }
 
     /// Shades the listed pixels; the workgroup count comes from `counter[1..4]`.
-    pub fn encode_list(&self, encoder: &mut wgpu::CommandEncoder, bind_group: &wgpu::BindGroup, counter: &wgpu::Buffer) {
-        let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor { label: Some(LABEL), timestamp_writes: None });
+    pub fn encode_list(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        bind_group: &wgpu::BindGroup,
+        counter: &wgpu::Buffer,
+        timer: &mut PassTimer,
+    ) {
+        let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor { label: Some(LABEL), timestamp_writes: timer.compute(LABEL) });
         pass.set_pipeline(&self.list);
         pass.set_bind_group(0, bind_group, &[]);
         pass.dispatch_workgroups_indirect(counter, 4);
     }
 
-    pub fn encode_grid(&self, encoder: &mut wgpu::CommandEncoder, bind_group: &wgpu::BindGroup, size: (u32, u32)) {
-        gpu::dispatch_frame(encoder, LABEL, &self.grid, bind_group, size);
+    pub fn encode_grid(&self, encoder: &mut wgpu::CommandEncoder, bind_group: &wgpu::BindGroup, size: (u32, u32), timer: &mut PassTimer) {
+        gpu::dispatch_frame(encoder, LABEL, &self.grid, bind_group, size, timer);
     }
 }
