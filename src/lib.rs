@@ -16,6 +16,7 @@ pub mod encode;
 pub mod foveation;
 pub mod optics;
 pub mod protocol;
+pub mod quality;
 pub mod render;
 pub mod scene;
 pub mod server;
