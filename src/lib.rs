@@ -11,6 +11,7 @@
 //! - [`server`]: the axum app: static page, `/ws` sessions, health.
 //! - [`client`]: a Rust WebSocket client speaking the protocol (tests now, replay and load later).
 
+pub mod bench;
 pub mod client;
 pub mod encode;
 pub mod foveation;

@@ -161,6 +161,11 @@ impl Renderer {
         self.gpu.summary()
     }
 
+    /// Whether per-pass GPU times are measured (timestamp queries).
+    pub fn timestamps(&self) -> bool {
+        self.timer.enabled()
+    }
+
     /// Loads a scene onto the GPU ahead of its first frame (otherwise the first frame does it).
     pub fn load_scene(&mut self, name: &str) -> Result<&Scene, RenderError> {
         if !self.scenes.contains_key(name) {

@@ -1,0 +1,88 @@
+//! The configurations a sweep measures: the presets, then one knob at a time around `balanced`.
+
+use serde::{Deserialize, Serialize};
+
+use crate::foveation::{Noise, Reconstruction, Settings};
+use crate::optics::acuity::ProbabilityForm;
+use crate::protocol::Codec;
+
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct BenchConfig {
+    pub name: String,
+    pub settings: Settings,
+    pub codec: Codec,
+    pub quality: u8,
+}
+
+impl BenchConfig {
+    fn preset(name: &str) -> Option<BenchConfig> {
+        Some(BenchConfig { name: name.to_string(), settings: Settings::preset(name)?, codec: Codec::Jpeg, quality: 85 })
+    }
+
+    fn variant(name: String, tweak: impl FnOnce(&mut Settings)) -> BenchConfig {
+        let mut c = BenchConfig::preset("balanced").expect("balanced is a preset");
+        tweak(&mut c.settings);
+        c.settings.preset = name.clone();
+        c.name = name;
+        c
+    }
+}
+
+/// `presets`: the named presets. `knobs`: presets plus single-knob variations of `balanced`
+/// (MAR slope, ξ, probability form, saliency, reprojection, reconstruction, noise, compaction)
+/// and the encoder. Any other value is a comma-separated list of names from `knobs`.
+pub fn sweep(which: &str) -> Result<Vec<BenchConfig>, String> {
+    let presets: Vec<BenchConfig> = crate::foveation::PRESETS.iter().filter_map(|p| BenchConfig::preset(p)).collect();
+    let mut knobs = presets.clone();
+    for m in [0.015f32, 0.034, 0.05] {
+        knobs.push(BenchConfig::variant(format!("balanced m={m}"), |s| s.foveation.mar_slope = m));
+    }
+    for xi in [0.01f32, 0.02, 0.1, 0.2] {
+        knobs.push(BenchConfig::variant(format!("balanced ξ={xi}"), |s| s.foveation.min_probability = xi));
+    }
+    knobs.push(BenchConfig::variant("balanced linear-p".into(), |s| s.foveation.probability = ProbabilityForm::Linear));
+    knobs.push(BenchConfig::variant("balanced no-saliency".into(), |s| s.foveation.saliency = false));
+    knobs.push(BenchConfig::variant("balanced no-reprojection".into(), |s| s.foveation.reprojection = false));
+    knobs.push(BenchConfig::variant("balanced nearest".into(), |s| s.foveation.reconstruction = Reconstruction::Nearest));
+    knobs.push(BenchConfig::variant("balanced white-noise".into(), |s| s.foveation.noise = Noise::White));
+    knobs.push(BenchConfig::variant("balanced no-compaction".into(), |s| s.foveation.compaction = false));
+    for q in [50u8, 95] {
+        let mut c = BenchConfig::preset("balanced").expect("balanced is a preset");
+        c.quality = q;
+        c.name = format!("balanced jpeg q{q}");
+        knobs.push(c);
+    }
+    let mut png = BenchConfig::preset("balanced").expect("balanced is a preset");
+    png.codec = Codec::Png;
+    png.name = "balanced png".into();
+    knobs.push(png);
+    match which {
+        "presets" => Ok(presets),
+        "knobs" => Ok(knobs),
+        list => list
+            .split(',')
+            .map(|n| {
+                let n = n.trim();
+                knobs.iter().find(|c| c.name == n).cloned().ok_or_else(|| {
+                    let names: Vec<&str> = knobs.iter().map(|c| c.name.as_str()).collect();
+                    format!("unknown configuration {n:?}; known: {}", names.join(", "))
+                })
+            })
+            .collect(),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    #[test]
+    fn sweeps_contain_the_baselines_and_names_are_unique() {
+        let k = super::sweep("knobs").unwrap();
+        assert!(k.iter().any(|c| c.name == "full") && k.iter().any(|c| c.name == "reference"));
+        let mut names: Vec<&str> = k.iter().map(|c| c.name.as_str()).collect();
+        names.sort();
+        names.dedup();
+        assert_eq!(names.len(), k.len());
+        assert_eq!(super::sweep("full,fast").unwrap().len(), 2);
+        assert!(super::sweep("full,nonsense").unwrap_err().contains("nonsense"));
+    }
+}

@@ -1,0 +1,170 @@
+//! Runs a sweep: for each scene, size and gaze, every configuration renders the same frames,
+//! interleaved, and each measured frame is compared with the reference render of that frame.
+
+use std::collections::BTreeMap;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::time::Instant;
+
+use super::configs::BenchConfig;
+use super::report::{BenchRecord, BenchReport, Machine, Spread};
+use crate::encode;
+use crate::foveation::Settings;
+use crate::optics::acuity::Viewing;
+use crate::protocol::Display;
+use crate::quality::{self, Errors, Weighting};
+use crate::render::{FrameRequest, RenderError, Renderer};
+
+#[derive(Debug, Clone)]
+pub struct BenchOptions {
+    pub scenes: Vec<String>,
+    pub sizes: Vec<(u32, u32)>,
+    /// Fixed gaze points; with `moving` each group sweeps from its point across the frame.
+    pub gazes: Vec<[f32; 2]>,
+    pub moving: bool,
+    pub warmup: u32,
+    pub frames: u32,
+    pub configs: Vec<BenchConfig>,
+    pub display: Display,
+    pub pupil_mm: f32,
+}
+
+/// Receives (frames done, frames in all, what is running) after every frame.
+pub type Progress<'a> = &'a mut dyn FnMut(usize, usize, &str);
+
+/// One configuration's measurements within one group.
+#[derive(Default)]
+struct Samples {
+    frame_ms: Vec<f64>,
+    encode_ms: Vec<f64>,
+    bytes: Vec<f64>,
+    sampled: Vec<f64>,
+    passes: BTreeMap<String, Vec<f64>>,
+    errors: Vec<Errors>,
+}
+
+fn gaze_at(start: [f32; 2], moving: bool, frame: u32) -> [f32; 2] {
+    if !moving {
+        return start;
+    }
+    // A slow pursuit around the start point: consecutive frames overlap, so history is reused.
+    let a = frame as f32 * 0.15;
+    [(start[0] + 0.15 * a.sin()).clamp(0.0, 1.0), (start[1] + 0.1 * (0.7 * a).cos() - 0.1).clamp(0.0, 1.0)]
+}
+
+pub fn run(renderer: &mut Renderer, opts: &BenchOptions, stop: &AtomicBool, progress: Progress) -> Result<BenchReport, RenderError> {
+    let started = Instant::now();
+    let groups: Vec<(String, (u32, u32), [f32; 2])> = opts
+        .scenes
+        .iter()
+        .flat_map(|s| opts.sizes.iter().flat_map(move |z| opts.gazes.iter().map(move |g| (s.clone(), *z, *g))))
+        .collect();
+    let per_group = (opts.warmup + opts.frames) as usize * (opts.configs.len() + 1);
+    let total = groups.len() * per_group;
+    let mut done = 0usize;
+    let mut records = Vec::new();
+    let mut interrupted = false;
+    let reference = Settings::preset("reference").expect("reference is a preset");
+    'groups: for (gi, (scene, (w, h), gaze0)) in groups.iter().enumerate() {
+        let viewing = Viewing { width: *w, height: *h, width_cm: opts.display.width_cm, distance_cm: opts.display.distance_cm };
+        let mut samples: Vec<Samples> = opts.configs.iter().map(|_| Samples::default()).collect();
+        let stream_base = 1_000 * (gi as u64 + 1);
+        for f in 0..opts.warmup + opts.frames {
+            let gaze = gaze_at(*gaze0, opts.moving, f);
+            let measured = f >= opts.warmup;
+            let request = |settings: &Settings, stream: u64| {
+                let mut r = FrameRequest::new(scene, *w, *h);
+                r.gaze = gaze;
+                r.settings = settings.clone();
+                r.display = opts.display;
+                r.pupil_mm = opts.pupil_mm;
+                r.stream = stream;
+                r
+            };
+            let reference_frame = renderer.render(&request(&reference, stream_base + 999))?;
+            done += 1;
+            let gaze_px = [f64::from(gaze[0]) * f64::from(*w), f64::from(gaze[1]) * f64::from(*h)];
+            let weights = Weighting::default();
+            for (ci, config) in opts.configs.iter().enumerate() {
+                if stop.load(Ordering::Relaxed) {
+                    interrupted = true;
+                    break 'groups;
+                }
+                progress(done, total, &config.name);
+                let frame = renderer.render(&request(&config.settings, stream_base + ci as u64))?;
+                let t0 = Instant::now();
+                let bytes = encode::encode(&frame.rgba, *w, *h, config.codec, config.quality)
+                    .map_err(|e| RenderError::Readback(format!("encoding: {e}")))?;
+                let encode_ms = t0.elapsed().as_secs_f64() * 1e3;
+                done += 1;
+                if !measured {
+                    continue;
+                }
+                let s = &mut samples[ci];
+                s.frame_ms.push(frame.render_ms);
+                s.encode_ms.push(encode_ms);
+                s.bytes.push(bytes.len() as f64);
+                s.sampled.push(frame.sampled);
+                for (k, v) in &frame.passes_ms {
+                    s.passes.entry(k.clone()).or_default().push(*v);
+                }
+                s.errors.push(quality::measure(&reference_frame.rgba, &frame.rgba, *w, *h, &viewing, gaze_px, &weights));
+            }
+        }
+        for (config, s) in opts.configs.iter().zip(samples) {
+            if s.frame_ms.is_empty() {
+                continue;
+            }
+            records.push(BenchRecord {
+                config: config.name.clone(),
+                scene: scene.clone(),
+                width: *w,
+                height: *h,
+                gaze: *gaze0,
+                moving_gaze: opts.moving,
+                settings: config.settings.clone(),
+                codec: config.codec,
+                quality: config.quality,
+                frames: s.frame_ms.len(),
+                frame_ms: Spread::of(&s.frame_ms),
+                passes_ms: s.passes.iter().map(|(k, v)| (k.clone(), Spread::of(v).median)).collect(),
+                encode_ms: Spread::of(&s.encode_ms),
+                bytes: Spread::of(&s.bytes).median,
+                sampled: Spread::of(&s.sampled).median,
+                errors: median_errors(&s.errors),
+                speedup_vs_full: None,
+                shade_speedup_vs_full: None,
+                pareto: false,
+            });
+        }
+    }
+    let machine = Machine::describe(renderer);
+    let mut report = BenchReport {
+        machine,
+        seconds: started.elapsed().as_secs_f64(),
+        interrupted,
+        warmup: opts.warmup,
+        frames: opts.frames,
+        display: opts.display,
+        records,
+    };
+    report.finish();
+    Ok(report)
+}
+
+fn median_errors(e: &[Errors]) -> Errors {
+    let m = |f: fn(&Errors) -> f64| {
+        let v: Vec<f64> = e.iter().map(|x| f(x).min(quality::PSNR_CAP_DB)).collect();
+        Spread::of(&v).median
+    };
+    Errors {
+        psnr: m(|e| e.psnr),
+        ssim: m(|e| e.ssim),
+        flip: m(|e| e.flip),
+        psnr_pooled: m(|e| e.psnr_pooled),
+        ssim_pooled: m(|e| e.ssim_pooled),
+        flip_pooled: m(|e| e.flip_pooled),
+        psnr_fovea: m(|e| e.psnr_fovea),
+        ssim_fovea: m(|e| e.ssim_fovea),
+        flip_fovea: m(|e| e.flip_fovea),
+    }
+}
