@@ -30,6 +30,8 @@ struct Frame {
     temporal: vec4<f32>,
     // xy: blue-noise tile offset; z: overlay (0 none, 1 samples, 2 probability); w: unused.
     tile: vec4<u32>,
+    // Gaze marker: xy centre in pixels; z ring radius, w ring thickness (pixels); z = 0: none.
+    marker: vec4<f32>,
 }
 
 const MODE_FOVEATED: u32 = 1u;
@@ -62,6 +64,12 @@ fn frame_size() -> vec2<i32> {
 fn in_frame(p: vec2<i32>) -> bool {
     let s = frame_size();
     return p.x >= 0 && p.y >= 0 && p.x < s.x && p.y < s.y;
+}
+
+// Per-pixel buffers are row-major arrays: storage buffers are much cheaper than storage
+// textures on software adapters, and no slower on GPUs for these access patterns.
+fn index_of(p: vec2<i32>) -> u32 {
+    return u32(p.y) * frame.size.x + u32(p.x);
 }
 
 fn pack_seed(p: vec2<i32>) -> u32 {

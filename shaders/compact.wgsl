@@ -2,7 +2,7 @@
 // dense list, so the shading dispatch runs exactly as many invocations as there are samples.
 // Each 8×8 tile reserves its slots with one global atomic, so list order keeps tiles together.
 
-@group(0) @binding(1) var flags_tex: texture_2d<u32>;
+@group(0) @binding(1) var<storage, read> flags: array<u32>;
 @group(0) @binding(2) var<storage, read_write> list: array<u32>;
 // [0]: sampled count; [1..4]: indirect dispatch arguments for the shading pass.
 @group(0) @binding(3) var<storage, read_write> counter: array<atomic<u32>, 4>;
@@ -18,7 +18,7 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>, @builtin(local_invocation_
     workgroupBarrier();
     let p = vec2<i32>(id.xy);
     var slot = 0xFFFFFFFFu;
-    if (in_frame(p) && (textureLoad(flags_tex, p, 0).r & FLAG_SAMPLED) != 0u) {
+    if (in_frame(p) && (flags[index_of(p)] & FLAG_SAMPLED) != 0u) {
         slot = atomicAdd(&tile_count, 1u);
     }
     workgroupBarrier();

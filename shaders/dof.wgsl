@@ -2,9 +2,9 @@
 // as wide as its blur circle, β ≈ A·|1/d_focus − 1/d| (A pupil diameter, d_focus the depth under
 // the gaze). A simple gather over a Vogel spiral; the background is treated as in focus.
 
-@group(0) @binding(1) var src: texture_2d<f32>;
+@group(0) @binding(1) var<storage, read> src: array<vec4<f32>>;
 @group(0) @binding(2) var normal_distance: texture_2d<f32>;
-@group(0) @binding(3) var out_dof: texture_storage_2d<rgba16float, write>;
+@group(0) @binding(3) var<storage, read_write> out_dof: array<vec4<f32>>;
 
 const TAPS: i32 = 24;
 const MAX_RADIUS_PX: f32 = 24.0;
@@ -37,8 +37,9 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
         return;
     }
     let r = blur_radius_px(p);
+    let k = index_of(p);
     if (r < 0.5) {
-        textureStore(out_dof, p, textureLoad(src, p, 0));
+        out_dof[k] = src[k];
         return;
     }
     var sum = vec3<f32>(0.0);
@@ -48,7 +49,7 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
         let angle = f32(i) * 2.39996323;
         let offset = vec2<f32>(cos(angle), sin(angle)) * sqrt(t) * r;
         let q = clamp(p + vec2<i32>(round(offset)), vec2<i32>(0), frame_size() - 1);
-        sum += textureLoad(src, q, 0).rgb;
+        sum += src[index_of(q)].rgb;
     }
-    textureStore(out_dof, p, vec4<f32>(sum / f32(TAPS), 1.0));
+    out_dof[k] = vec4<f32>(sum / f32(TAPS), 1.0);
 }

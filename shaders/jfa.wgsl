@@ -2,8 +2,8 @@
 // or to the 8 pixels `step` away. CPU twin: foveation::reconstruct::jfa_pass (same scan order,
 // same strict comparison, integer distances: bit-identical results).
 
-@group(0) @binding(1) var seeds_in: texture_2d<u32>;
-@group(0) @binding(2) var seeds_out: texture_storage_2d<r32uint, write>;
+@group(0) @binding(1) var<storage, read> seeds_in: array<u32>;
+@group(0) @binding(2) var<storage, read_write> seeds_out: array<u32>;
 // x: jump size in pixels.
 @group(0) @binding(3) var<uniform> jump: vec4<u32>;
 
@@ -14,7 +14,7 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
         return;
     }
     let k = i32(jump.x);
-    var best = textureLoad(seeds_in, p, 0).r;
+    var best = seeds_in[index_of(p)];
     var best_d = seed_dist2(best, p);
     for (var j = -1; j <= 1; j++) {
         for (var i = -1; i <= 1; i++) {
@@ -22,7 +22,7 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
             if (!in_frame(q)) {
                 continue;
             }
-            let s = textureLoad(seeds_in, q, 0).r;
+            let s = seeds_in[index_of(q)];
             let d = seed_dist2(s, p);
             if (d < best_d) {
                 best = s;
@@ -30,5 +30,5 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
             }
         }
     }
-    textureStore(seeds_out, p, vec4<u32>(best));
+    seeds_out[index_of(p)] = best;
 }

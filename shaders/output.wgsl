@@ -1,10 +1,30 @@
 // Output pass: linear colour to sRGB bytes (CPU twin: optics::color::linear_to_srgb), with the
-// optional overlays that show how the frame was made.
+// optional overlays that show how the frame was made, and the gaze marker: a magenta ring with
+// a centre dot and a dark outline at the gaze position the server used.
 
-@group(0) @binding(1) var src: texture_2d<f32>;
-@group(0) @binding(2) var flags_tex: texture_2d<u32>;
-@group(0) @binding(3) var probability_tex: texture_2d<f32>;
-@group(0) @binding(4) var out_final: texture_storage_2d<rgba8unorm, write>;
+@group(0) @binding(1) var<storage, read> src: array<vec4<f32>>;
+@group(0) @binding(2) var<storage, read> flags: array<u32>;
+@group(0) @binding(3) var<storage, read> probability: array<f32>;
+// Packed RGBA8 (red in the low byte): exactly the bytes of the image.
+@group(0) @binding(4) var<storage, read_write> out_final: array<u32>;
+
+// 1 inside `half_width` of the curve, 0 beyond it, with a one-pixel antialiased edge.
+fn band(distance_to_curve: f32, half_width: f32) -> f32 {
+    return 1.0 - smoothstep(half_width - 0.5, half_width + 0.5, distance_to_curve);
+}
+
+// The marker over an sRGB-encoded colour.
+fn draw_marker(p: vec2<f32>, under: vec3<f32>) -> vec3<f32> {
+    let c = frame.marker;
+    let d = distance(p, c.xy);
+    let half_t = 0.5 * c.w;
+    let fill = max(band(abs(d - c.z), half_t), band(d, 0.6 * c.w));
+    let outline = max(band(abs(d - c.z), half_t + 1.5), band(d, 0.6 * c.w + 1.5));
+    let magenta = vec3<f32>(1.0, 0.25, 0.8);
+    let alpha = max(0.85 * outline, fill);
+    // Premultiplied: the magenta fill over a dark outline over the frame.
+    return magenta * fill + under * (1.0 - alpha);
+}
 
 fn linear_to_srgb(c: f32) -> f32 {
     let x = clamp(c, 0.0, 1.0);
@@ -26,19 +46,23 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
     if (!in_frame(p)) {
         return;
     }
-    var rgb = textureLoad(src, p, 0).rgb;
+    let k = index_of(p);
+    var rgb = src[k].rgb;
     if (has_mode(MODE_FOVEATED) && frame.tile.z != 0u) {
-        let flags = textureLoad(flags_tex, p, 0).r;
+        let f = flags[k];
         if (frame.tile.z == 1u) {
-            if ((flags & FLAG_SAMPLED) != 0u) {
+            if ((f & FLAG_SAMPLED) != 0u) {
                 rgb = mix(rgb, vec3<f32>(0.1, 1.0, 0.2), 0.6);
-            } else if ((flags & FLAG_REUSED) != 0u) {
+            } else if ((f & FLAG_REUSED) != 0u) {
                 rgb = mix(rgb, vec3<f32>(0.1, 0.3, 1.0), 0.45);
             }
-        } else if ((flags & FLAG_COVERED) != 0u) {
-            rgb = mix(rgb, heat(textureLoad(probability_tex, p, 0).r), 0.7);
+        } else if ((f & FLAG_COVERED) != 0u) {
+            rgb = mix(rgb, heat(probability[k]), 0.7);
         }
     }
-    let s = vec3<f32>(linear_to_srgb(rgb.r), linear_to_srgb(rgb.g), linear_to_srgb(rgb.b));
-    textureStore(out_final, p, vec4<f32>(s, 1.0));
+    var s = vec3<f32>(linear_to_srgb(rgb.r), linear_to_srgb(rgb.g), linear_to_srgb(rgb.b));
+    if (frame.marker.z > 0.0) {
+        s = draw_marker(vec2<f32>(p) + 0.5, s);
+    }
+    out_final[k] = pack4x8unorm(vec4<f32>(s, 1.0));
 }

@@ -1,22 +1,23 @@
-// Resolve pass: every pixel gets a colour. Background from the G-buffer coverage; shaded and
+// Resolve pass (foveated frames only): every pixel gets a colour. Background from the G-buffer coverage; shaded and
 // reused pixels keep theirs; the rest take their nearest sample's colour (Voronoi) or the
 // windowed approximate Sibson average (thesis Listing 4 in gather form: every covered q in the
 // window whose empty circle |q − s(q)| reaches p contributes s(q)'s colour). The window is the
 // ξ bound shrunk to twice the distance to p's nearest sample. CPU twin:
 // foveation::reconstruct::reconstruct.
 
-@group(0) @binding(1) var color_tex: texture_2d<f32>;
-@group(0) @binding(2) var nearest_tex: texture_2d<u32>;
+@group(0) @binding(1) var<storage, read> color: array<vec4<f32>>;
+@group(0) @binding(2) var<storage, read> nearest: array<u32>;
 @group(0) @binding(3) var albedo_tex: texture_2d<f32>;
-@group(0) @binding(4) var out_resolved: texture_storage_2d<rgba16float, write>;
+@group(0) @binding(4) var<storage, read_write> out_resolved: array<vec4<f32>>;
 @group(0) @binding(5) var normal_distance: texture_2d<f32>;
+@group(0) @binding(6) var<storage, read> flags: array<u32>;
 
 fn covered(p: vec2<i32>) -> bool {
-    return textureLoad(albedo_tex, p, 0).a > 0.5;
+    return (flags[index_of(p)] & FLAG_COVERED) != 0u;
 }
 
 fn seed_color(s: u32) -> vec3<f32> {
-    return textureLoad(color_tex, unpack_seed(s), 0).rgb;
+    return color[index_of(unpack_seed(s))].rgb;
 }
 
 @compute @workgroup_size(8, 8)
@@ -25,25 +26,22 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
     if (!in_frame(p)) {
         return;
     }
-    if (!has_mode(MODE_FOVEATED)) {
-        textureStore(out_resolved, p, vec4<f32>(textureLoad(color_tex, p, 0).rgb, 1.0));
-        return;
-    }
+    let k = index_of(p);
     if (!covered(p)) {
-        textureStore(out_resolved, p, vec4<f32>(frame.background.rgb, 1.0));
+        out_resolved[k] = vec4<f32>(frame.background.rgb, 1.0);
         return;
     }
-    let s = textureLoad(nearest_tex, p, 0).r;
+    let s = nearest[k];
     if (s == NO_SEED) {
         // No sample within jump-flooding reach (a sliver of the object far from every sample):
         // shade the pixel itself. Rare by construction of the reach, so cheap.
         let a = textureLoad(albedo_tex, p, 0).rgb;
-        textureStore(out_resolved, p, vec4<f32>(lambert(textureLoad(normal_distance, p, 0).xyz, a), 1.0));
+        out_resolved[k] = vec4<f32>(lambert(textureLoad(normal_distance, p, 0).xyz, a), 1.0);
         return;
     }
     let d2 = seed_dist2(s, p);
     if (d2 == 0 || !has_mode(MODE_SIBSON)) {
-        textureStore(out_resolved, p, vec4<f32>(seed_color(s), 1.0));
+        out_resolved[k] = vec4<f32>(seed_color(s), 1.0);
         return;
     }
     let j = clamp(i32(ceil(2.0 * sqrt(f32(d2)))), 1, max(i32(frame.temporal.w), 1));
@@ -57,7 +55,7 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
             if (!covered(q)) {
                 continue;
             }
-            let sq = textureLoad(nearest_tex, q, 0).r;
+            let sq = nearest[index_of(q)];
             if (sq == NO_SEED) {
                 continue;
             }
@@ -73,5 +71,5 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
     if (count > 0.0) {
         rgb = sum / count;
     }
-    textureStore(out_resolved, p, vec4<f32>(rgb, 1.0));
+    out_resolved[k] = vec4<f32>(rgb, 1.0);
 }

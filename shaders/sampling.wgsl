@@ -6,12 +6,12 @@
 @group(0) @binding(2) var albedo_tex: texture_2d<f32>;
 @group(0) @binding(3) var previous_px: texture_2d<f32>;
 @group(0) @binding(4) var rank_map: texture_2d<f32>;
-@group(0) @binding(5) var history_color: texture_2d<f32>;
+@group(0) @binding(5) var<storage, read> history_color: array<vec4<f32>>;
 @group(0) @binding(6) var history_normal_distance: texture_2d<f32>;
-@group(0) @binding(7) var out_probability: texture_storage_2d<r32float, write>;
-@group(0) @binding(8) var out_flags: texture_storage_2d<r32uint, write>;
-@group(0) @binding(9) var out_color: texture_storage_2d<rgba16float, write>;
-@group(0) @binding(10) var out_seeds: texture_storage_2d<r32uint, write>;
+@group(0) @binding(7) var<storage, read_write> out_probability: array<f32>;
+@group(0) @binding(8) var<storage, read_write> out_flags: array<u32>;
+@group(0) @binding(9) var<storage, read_write> out_color: array<vec4<f32>>;
+@group(0) @binding(10) var<storage, read_write> out_seeds: array<u32>;
 
 fn screen_point(p: vec2<f32>) -> vec3<f32> {
     let s = vec2<f32>(frame_size());
@@ -121,11 +121,12 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
     }
     let nd = textureLoad(normal_distance, p, 0);
     let covered = textureLoad(albedo_tex, p, 0).a > 0.5;
+    let k = index_of(p);
     if (!covered) {
-        textureStore(out_probability, p, vec4<f32>(0.0));
-        textureStore(out_flags, p, vec4<u32>(0u));
-        textureStore(out_color, p, vec4<f32>(frame.background.rgb, INVALID_AGE));
-        textureStore(out_seeds, p, vec4<u32>(NO_SEED));
+        out_probability[k] = 0.0;
+        out_flags[k] = 0u;
+        out_color[k] = vec4<f32>(frame.background.rgb, INVALID_AGE);
+        out_seeds[k] = NO_SEED;
         return;
     }
     let centre = vec2<f32>(p) + 0.5;
@@ -174,7 +175,7 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
             let prev_distance = textureLoad(history_normal_distance, q, 0).w;
             let world = frame.eye.xyz + view_ray(centre) * nd.w;
             let now = distance(world, frame.prev_eye.xyz);
-            let old = textureLoad(history_color, q, 0);
+            let old = history_color[index_of(q)];
             if (abs(prev_distance - now) < frame.temporal.y * max(now, 1e-6) && old.a < frame.temporal.x) {
                 flags |= FLAG_REUSED;
                 seed = pack_seed(p);
@@ -182,8 +183,8 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
             }
         }
     }
-    textureStore(out_probability, p, vec4<f32>(f));
-    textureStore(out_flags, p, vec4<u32>(flags));
-    textureStore(out_color, p, color);
-    textureStore(out_seeds, p, vec4<u32>(seed));
+    out_probability[k] = f;
+    out_flags[k] = flags;
+    out_color[k] = color;
+    out_seeds[k] = seed;
 }

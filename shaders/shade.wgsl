@@ -5,10 +5,10 @@
 
 @group(0) @binding(1) var normal_distance: texture_2d<f32>;
 @group(0) @binding(2) var albedo_tex: texture_2d<f32>;
-@group(0) @binding(3) var flags_tex: texture_2d<u32>;
+@group(0) @binding(3) var<storage, read> flags: array<u32>;
 @group(0) @binding(4) var<storage, read> list: array<u32>;
 @group(0) @binding(5) var<storage, read> counter: array<u32, 4>;
-@group(0) @binding(6) var out_color: texture_storage_2d<rgba16float, write>;
+@group(0) @binding(6) var<storage, read_write> out_color: array<vec4<f32>>;
 
 fn shade(p: vec2<i32>) {
     let a = textureLoad(albedo_tex, p, 0);
@@ -16,7 +16,7 @@ fn shade(p: vec2<i32>) {
     if (a.a > 0.5) {
         rgb = lambert(textureLoad(normal_distance, p, 0).xyz, a.rgb);
     }
-    textureStore(out_color, p, vec4<f32>(rgb, 0.0));
+    out_color[index_of(p)] = vec4<f32>(rgb, 0.0);
 }
 
 @compute @workgroup_size(64)
@@ -33,7 +33,7 @@ fn shade_grid(@builtin(global_invocation_id) id: vec3<u32>) {
     if (!in_frame(p)) {
         return;
     }
-    if (has_mode(MODE_FOVEATED) && (textureLoad(flags_tex, p, 0).r & FLAG_SAMPLED) == 0u) {
+    if (has_mode(MODE_FOVEATED) && (flags[index_of(p)] & FLAG_SAMPLED) == 0u) {
         return;
     }
     shade(p);

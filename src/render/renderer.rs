@@ -7,7 +7,6 @@ use super::gpu::{self, FramePass};
 use super::pass::compact::CompactPass;
 use super::pass::gbuffer::{GBufferPass, GBufferTargets, MeshBuffers};
 use super::pass::jfa::JfaPass;
-use super::pass::marker::MarkerPass;
 use super::pass::shade::ShadePass;
 use super::pass::{dof, output, resolve, sampling};
 use super::targets::{map_read, FrameTargets};
@@ -106,7 +105,6 @@ pub(crate) struct Passes {
     pub resolve: FramePass,
     pub dof: FramePass,
     pub output: FramePass,
-    pub marker: MarkerPass,
 }
 
 type TargetKey = (u64, String, u32, u32);
@@ -137,7 +135,6 @@ impl Renderer {
             resolve: resolve::new(d),
             dof: dof::new(d),
             output: output::new(d),
-            marker: MarkerPass::new(d),
         };
         let side = rank_map::TILE;
         let rank = gpu::texture_2d(
@@ -223,19 +220,20 @@ impl Renderer {
             t.write_jfa_steps(queue, &steps);
             let jfa: Vec<&wgpu::BindGroup> = t.bind.jfa.iter().take(steps.len()).collect();
             p.jfa.encode(&mut encoder, &jfa, size, timer);
+            p.resolve.encode(&mut encoder, &t.bind.resolve, size, timer);
         } else {
             p.shade.encode_grid(&mut encoder, &t.bind.shade, size, timer);
         }
-        p.resolve.encode(&mut encoder, &t.bind.resolve, size, timer);
-        if settings.dof {
-            p.dof.encode(&mut encoder, &t.bind.dof, size, timer);
-            p.output.encode(&mut encoder, &t.bind.output_dof, size, timer);
-        } else {
-            p.output.encode(&mut encoder, &t.bind.output_resolved, size, timer);
-        }
-        if req.marker {
-            p.marker.encode(queue, &mut encoder, &t.final_view, size, req.gaze, timer);
-        }
+        let output = match (settings.dof, fov.enabled) {
+            (true, foveated) => {
+                let from = if foveated { &t.bind.dof_from_resolved } else { &t.bind.dof_from_color };
+                p.dof.encode(&mut encoder, from, size, timer);
+                &t.bind.output_dof
+            }
+            (false, true) => &t.bind.output_resolved,
+            (false, false) => &t.bind.output_color,
+        };
+        p.output.encode(&mut encoder, output, size, timer);
         t.keep_history(&mut encoder);
         timer.resolve(&mut encoder);
         let submission = queue.submit([encoder.finish()]);
@@ -270,23 +268,18 @@ impl Renderer {
             .iter()
             .find(|(k, _)| *k == key)
             .ok_or_else(|| RenderError::Readback(format!("no frame rendered for stream {stream} at {width}x{height}")))?;
-        let read = |tex: &wgpu::Texture, bpp: u32| read_texture(&self.gpu, tex, bpp);
-        let f32s = |b: Vec<u8>| -> Vec<f32> { bytemuck::cast_slice(&b).to_vec() };
-        let u32s = |b: Vec<u8>| -> Vec<u32> { bytemuck::cast_slice(&b).to_vec() };
-        let halves = |b: Vec<u8>| -> Vec<[f32; 4]> {
-            b.chunks_exact(8)
-                .map(|c| std::array::from_fn(|i| f16_to_f32(u16::from_le_bytes([c[2 * i], c[2 * i + 1]]))))
-                .collect()
-        };
-        let quads = |b: Vec<u8>| -> Vec<[f32; 4]> { bytemuck::cast_slice::<u8, [f32; 4]>(&b).to_vec() };
+        let buf = |b: &wgpu::Buffer| read_buffer(&self.gpu, b);
+        let f32s = |b: Vec<u8>| -> Vec<f32> { bytemuck::pod_collect_to_vec(&b) };
+        let u32s = |b: Vec<u8>| -> Vec<u32> { bytemuck::pod_collect_to_vec(&b) };
+        let quads = |b: Vec<u8>| -> Vec<[f32; 4]> { bytemuck::pod_collect_to_vec(&b) };
         Ok(Inspection {
-            probability: f32s(read(&t.probability, 4)?),
-            flags: u32s(read(&t.flags, 4)?),
-            seeds: u32s(read(&t.seeds, 4)?),
-            nearest: u32s(read(t.jfa_result(), 4)?),
-            color: halves(read(&t.color, 8)?),
-            resolved: halves(read(&t.resolved, 8)?),
-            normal_distance: quads(read(&t.normal_distance, 16)?),
+            probability: f32s(buf(&t.probability)?),
+            flags: u32s(buf(&t.flags)?),
+            seeds: u32s(buf(&t.seeds)?),
+            nearest: u32s(buf(t.jfa_result())?),
+            color: quads(buf(&t.color)?),
+            resolved: quads(buf(&t.resolved)?),
+            normal_distance: quads(read_texture(&self.gpu, &t.normal_distance, 16)?),
         })
     }
 
@@ -298,7 +291,7 @@ impl Renderer {
         if self.targets.len() >= TARGET_CACHE {
             self.targets.remove(0);
         }
-        let t = FrameTargets::new(&self.gpu.device, &self.gpu.queue, &self.passes, &self.rank_map, w, h);
+        let t = FrameTargets::new(&self.gpu.device, &self.passes, &self.rank_map, w, h);
         self.targets.push((key, t));
         self.targets.len() - 1
     }
@@ -376,7 +369,26 @@ fn frame_uniform(scene: &Scene, camera: &Camera, req: &FrameRequest, t: &FrameTa
             fov.sibson_max_window() as f32,
         ],
         tile: [offset[0], offset[1], overlay, 0],
+        marker: if req.marker {
+            let (radius, thickness) = super::pass::output::marker_size(w, h);
+            [gaze_px[0] as f32, gaze_px[1] as f32, radius, thickness]
+        } else {
+            [0.0; 4]
+        },
     }
+}
+
+fn read_buffer(gpu: &Gpu, source: &wgpu::Buffer) -> Result<Vec<u8>, RenderError> {
+    let buffer = gpu.device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some("inspect"),
+        size: source.size(),
+        usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
+        mapped_at_creation: false,
+    });
+    let mut encoder = gpu.device.create_command_encoder(&Default::default());
+    encoder.copy_buffer_to_buffer(source, 0, &buffer, 0, source.size());
+    let submission = gpu.queue.submit([encoder.finish()]);
+    map_read(&gpu.device, submission, &buffer, |bytes| bytes.to_vec())
 }
 
 fn read_texture(gpu: &Gpu, texture: &wgpu::Texture, bytes_per_pixel: u32) -> Result<Vec<u8>, RenderError> {

@@ -1,16 +1,16 @@
 //! Everything one stream (a session, or one `fovea render`) needs on the GPU at one frame size:
-//! the G-buffer, the sampling and reconstruction textures, the history the next frame reuses,
-//! the compaction list, and the bind groups tying them to the passes. Kept per stream because
-//! history belongs to one viewer's sequence of frames.
+//! the G-buffer, the per-pixel buffers of sampling and reconstruction, the history the next
+//! frame reuses, the compaction list, and the bind groups tying them to the passes. Kept per
+//! stream because history belongs to one viewer's sequence of frames.
 
 use super::gpu::{self, view};
-use super::pass::{gbuffer, jfa, output};
+use super::pass::{gbuffer, jfa};
 use super::renderer::Passes;
 use super::uniforms::FrameUniform;
 use super::RenderError;
 use crate::foveation::reconstruct::jfa_steps;
 
-use wgpu::TextureFormat as F;
+use wgpu::BufferUsages as B;
 use wgpu::TextureUsages as U;
 
 pub struct FrameTargets {
@@ -21,34 +21,33 @@ pub struct FrameTargets {
     pub normal_distance: wgpu::Texture,
     pub albedo: wgpu::Texture,
     pub previous: wgpu::Texture,
-    pub history_color: wgpu::Texture,
     pub history_normal_distance: wgpu::Texture,
-    pub probability: wgpu::Texture,
-    pub flags: wgpu::Texture,
-    pub color: wgpu::Texture,
-    pub seeds: wgpu::Texture,
-    /// Jump flooding ping-pong; the result lands in `jfa_result`.
-    pub jfa_a: wgpu::Texture,
-    pub jfa_b: wgpu::Texture,
-    pub resolved: wgpu::Texture,
-    /// Owned here; passes reach it through bind groups.
-    _dof_color: wgpu::Texture,
-    pub final_image: wgpu::Texture,
-    pub final_view: wgpu::TextureView,
+    /// Per-pixel buffers, row-major.
+    pub probability: wgpu::Buffer,
+    pub flags: wgpu::Buffer,
+    pub color: wgpu::Buffer,
+    pub history_color: wgpu::Buffer,
+    pub seeds: wgpu::Buffer,
+    /// Jump flooding ping-pong; see `jfa_result`.
+    pub jfa_a: wgpu::Buffer,
+    pub jfa_b: wgpu::Buffer,
+    pub resolved: wgpu::Buffer,
+    /// Packed RGBA8 rows, exactly the output image.
+    pub final_image: wgpu::Buffer,
     /// `[count, workgroups x, y, z]` for the indirect shading dispatch.
     pub counter: wgpu::Buffer,
     pub jfa_steps: usize,
     pub bind: Bindings,
     readback: wgpu::Buffer,
     counter_readback: wgpu::Buffer,
-    padded_row: u32,
     /// Last frame's camera, and whether its buffers may be reused.
     pub prev_view_proj: glam::Mat4,
     pub prev_eye: glam::Vec3,
     pub has_history: bool,
     pub frame_index: u32,
-    /// Per-step jump sizes for the JFA passes (bound through `bind.jfa`).
-    _jump: wgpu::Buffer,
+    /// Owned here; passes reach them through bind groups.
+    _dof: wgpu::Buffer,
+    jump: wgpu::Buffer,
 }
 
 pub struct Bindings {
@@ -58,135 +57,121 @@ pub struct Bindings {
     pub shade: wgpu::BindGroup,
     pub jfa: Vec<wgpu::BindGroup>,
     pub resolve: wgpu::BindGroup,
-    pub dof: wgpu::BindGroup,
+    /// Depth of field from the shaded colour (full mode) or the resolved one (foveated).
+    pub dof_from_color: wgpu::BindGroup,
+    pub dof_from_resolved: wgpu::BindGroup,
+    /// Output from the shaded colour, the resolved colour, or the depth-of-field result.
+    pub output_color: wgpu::BindGroup,
     pub output_resolved: wgpu::BindGroup,
     pub output_dof: wgpu::BindGroup,
 }
 
 impl FrameTargets {
-    pub fn new(
-        device: &wgpu::Device,
-        queue: &wgpu::Queue,
-        passes: &Passes,
-        rank_map: &wgpu::TextureView,
-        width: u32,
-        height: u32,
-    ) -> FrameTargets {
+    pub fn new(device: &wgpu::Device, passes: &Passes, rank_map: &wgpu::TextureView, width: u32, height: u32) -> FrameTargets {
         let size = (width, height);
+        let pixels = u64::from(width) * u64::from(height);
         let tex = |label, format, usage| gpu::texture_2d(device, label, size, format, usage);
         let attach = U::RENDER_ATTACHMENT | U::TEXTURE_BINDING | U::COPY_SRC;
-        let store = U::STORAGE_BINDING | U::TEXTURE_BINDING | U::COPY_SRC;
         let depth = tex("gbuffer.depth", gbuffer::DEPTH, U::RENDER_ATTACHMENT);
         let normal_distance = tex("gbuffer.normal_distance", gbuffer::NORMAL_DISTANCE, attach);
         let albedo = tex("gbuffer.albedo", gbuffer::ALBEDO, attach);
         let previous = tex("gbuffer.previous", gbuffer::PREVIOUS, attach);
-        let history_color = tex("history.color", F::Rgba16Float, U::TEXTURE_BINDING | U::COPY_DST);
         let history_normal_distance = tex("history.normal_distance", gbuffer::NORMAL_DISTANCE, U::TEXTURE_BINDING | U::COPY_DST);
-        let probability = tex("sampling.probability", F::R32Float, store);
-        let flags = tex("sampling.flags", F::R32Uint, store);
-        let color = tex("shade.color", F::Rgba16Float, store);
-        let seeds = tex("sampling.seeds", F::R32Uint, store);
-        let jfa_a = tex("jfa.a", F::R32Uint, store);
-        let jfa_b = tex("jfa.b", F::R32Uint, store);
-        let resolved = tex("resolve.color", F::Rgba16Float, store);
-        let dof = tex("dof.color", F::Rgba16Float, store);
-        let final_image = tex("output.final", output::FORMAT, store | U::RENDER_ATTACHMENT);
 
-        let uniform = device.create_buffer(&wgpu::BufferDescriptor {
-            label: Some("frame.uniform"),
-            size: std::mem::size_of::<FrameUniform>() as u64,
-            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
-            mapped_at_creation: false,
-        });
         let buffer = |label, size: u64, usage| device.create_buffer(&wgpu::BufferDescriptor { label: Some(label), size, usage, mapped_at_creation: false });
-        use wgpu::BufferUsages as B;
-        let list = buffer("compact.list", u64::from(width) * u64::from(height) * 4, B::STORAGE);
+        let per_pixel = |label, bytes: u64| buffer(label, pixels * bytes, B::STORAGE | B::COPY_SRC | B::COPY_DST);
+        let probability = per_pixel("sampling.probability", 4);
+        let flags = per_pixel("sampling.flags", 4);
+        let color = per_pixel("shade.color", 16);
+        let history_color = per_pixel("history.color", 16);
+        let seeds = per_pixel("sampling.seeds", 4);
+        let jfa_a = per_pixel("jfa.a", 4);
+        let jfa_b = per_pixel("jfa.b", 4);
+        let resolved = per_pixel("resolve.color", 16);
+        let dof = per_pixel("dof.color", 16);
+        let final_image = per_pixel("output.final", 4);
+        let list = per_pixel("compact.list", 4);
         let counter = buffer("compact.counter", 16, B::STORAGE | B::INDIRECT | B::COPY_SRC | B::COPY_DST);
+        let uniform = buffer("frame.uniform", std::mem::size_of::<FrameUniform>() as u64, B::UNIFORM | B::COPY_DST);
         let steps = jfa_steps(width, height);
         // Room for the longest step list; each frame writes the steps it runs.
         let jump = buffer("jfa.steps", jfa::SLOT * steps.len() as u64, B::UNIFORM | B::COPY_DST);
-        let _ = queue;
-        let align = wgpu::COPY_BYTES_PER_ROW_ALIGNMENT;
-        let padded_row = (width * 4).div_ceil(align) * align;
-        let readback = buffer("output.readback", u64::from(padded_row) * u64::from(height), B::COPY_DST | B::MAP_READ);
+        let readback = buffer("output.readback", pixels * 4, B::COPY_DST | B::MAP_READ);
         let counter_readback = buffer("compact.counter.readback", 16, B::COPY_DST | B::MAP_READ);
 
         let u = uniform.as_entire_binding();
-        let v = |t: &wgpu::Texture| view(t);
-        let (nd, alb, prev, hc, hnd) = (v(&normal_distance), v(&albedo), v(&previous), v(&history_color), v(&history_normal_distance));
-        let (prob, fl, col, sd, ja, jb) = (v(&probability), v(&flags), v(&color), v(&seeds), v(&jfa_a), v(&jfa_b));
-        let (res, dv, fin) = (v(&resolved), v(&dof), v(&final_image));
+        let (nd, alb, prev, hnd) = (view(&normal_distance), view(&albedo), view(&previous), view(&history_normal_distance));
         use wgpu::BindingResource::TextureView as T;
+        fn b(buf: &wgpu::Buffer) -> wgpu::BindingResource<'_> {
+            buf.as_entire_binding()
+        }
         let gbuffer_bg = gpu::bind(device, "gbuffer", &passes.gbuffer.layout, &[u.clone()]);
         let sampling = passes.sampling.bind(
             device,
-            &[u.clone(), T(&nd), T(&alb), T(&prev), T(rank_map), T(&hc), T(&hnd), T(&prob), T(&fl), T(&col), T(&sd)],
+            &[u.clone(), T(&nd), T(&alb), T(&prev), T(rank_map), b(&history_color), T(&hnd), b(&probability), b(&flags), b(&color), b(&seeds)],
         );
-        let compact = gpu::bind(device, "compact", &passes.compact.layout, &[u.clone(), T(&fl), list.as_entire_binding(), counter.as_entire_binding()]);
-        let shade = gpu::bind(
-            device,
-            "shade",
-            &passes.shade.layout,
-            &[u.clone(), T(&nd), T(&alb), T(&fl), list.as_entire_binding(), counter.as_entire_binding(), T(&col)],
-        );
+        let compact = gpu::bind(device, "compact", &passes.compact.layout, &[u.clone(), b(&flags), b(&list), b(&counter)]);
+        let shade =
+            gpu::bind(device, "shade", &passes.shade.layout, &[u.clone(), T(&nd), T(&alb), b(&flags), b(&list), b(&counter), b(&color)]);
         let jump_binding = wgpu::BindingResource::Buffer(wgpu::BufferBinding { buffer: &jump, offset: 0, size: wgpu::BufferSize::new(16) });
         // Step 0 reads the seeds; then a → b, b → a, …
         let jfa_groups: Vec<wgpu::BindGroup> = (0..steps.len())
             .map(|i| {
                 let (src, dst) = match (i, i % 2) {
-                    (0, _) => (&sd, &ja),
-                    (_, 1) => (&ja, &jb),
-                    _ => (&jb, &ja),
+                    (0, _) => (&seeds, &jfa_a),
+                    (_, 1) => (&jfa_a, &jfa_b),
+                    _ => (&jfa_b, &jfa_a),
                 };
-                gpu::bind(device, "jfa", &passes.jfa.layout, &[u.clone(), T(src), T(dst), jump_binding.clone()])
+                gpu::bind(device, "jfa", &passes.jfa.layout, &[u.clone(), b(src), b(dst), jump_binding.clone()])
             })
             .collect();
-        let nearest = if steps.len() % 2 == 1 { &ja } else { &jb };
-        let resolve = passes.resolve.bind(device, &[u.clone(), T(&col), T(nearest), T(&alb), T(&res), T(&nd)]);
-        let dof_bg = passes.dof.bind(device, &[u.clone(), T(&res), T(&nd), T(&dv)]);
-        let output_resolved = passes.output.bind(device, &[u.clone(), T(&res), T(&fl), T(&prob), T(&fin)]);
-        let output_dof = passes.output.bind(device, &[u.clone(), T(&dv), T(&fl), T(&prob), T(&fin)]);
+        let nearest = if steps.len() % 2 == 1 { &jfa_a } else { &jfa_b };
+        let resolve = passes.resolve.bind(device, &[u.clone(), b(&color), b(nearest), T(&alb), b(&resolved), T(&nd), b(&flags)]);
+        let dof_from_color = passes.dof.bind(device, &[u.clone(), b(&color), T(&nd), b(&dof)]);
+        let dof_from_resolved = passes.dof.bind(device, &[u.clone(), b(&resolved), T(&nd), b(&dof)]);
+        let output = |src: &wgpu::Buffer| passes.output.bind(device, &[u.clone(), b(src), b(&flags), b(&probability), b(&final_image)]);
+        let bind = Bindings {
+            gbuffer: gbuffer_bg,
+            sampling,
+            compact,
+            shade,
+            jfa: jfa_groups,
+            resolve,
+            dof_from_color,
+            dof_from_resolved,
+            output_color: output(&color),
+            output_resolved: output(&resolved),
+            output_dof: output(&dof),
+        };
         FrameTargets {
             width,
             height,
             uniform,
             depth: view(&depth),
-            final_view: fin.clone(),
             normal_distance,
             albedo,
             previous,
-            history_color,
             history_normal_distance,
             probability,
             flags,
             color,
+            history_color,
             seeds,
             jfa_a,
             jfa_b,
             resolved,
-            _dof_color: dof,
             final_image,
             counter,
             jfa_steps: steps.len(),
-            bind: Bindings {
-                gbuffer: gbuffer_bg,
-                sampling,
-                compact,
-                shade,
-                jfa: jfa_groups,
-                resolve,
-                dof: dof_bg,
-                output_resolved,
-                output_dof,
-            },
+            bind,
             readback,
             counter_readback,
-            padded_row,
             prev_view_proj: glam::Mat4::IDENTITY,
             prev_eye: glam::Vec3::ZERO,
             has_history: false,
             frame_index: 0,
-            _jump: jump,
+            _dof: dof,
+            jump,
         }
     }
 
@@ -197,11 +182,11 @@ impl FrameTargets {
             let at = i * jfa::SLOT as usize;
             bytes[at..at + 4].copy_from_slice(&s.to_le_bytes());
         }
-        queue.write_buffer(&self._jump, 0, &bytes);
+        queue.write_buffer(&self.jump, 0, &bytes);
     }
 
-    /// The texture holding each pixel's nearest seed after jump flooding.
-    pub fn jfa_result(&self) -> &wgpu::Texture {
+    /// The buffer holding each pixel's nearest seed after jump flooding.
+    pub fn jfa_result(&self) -> &wgpu::Buffer {
         if self.jfa_steps % 2 == 1 {
             &self.jfa_a
         } else {
@@ -216,31 +201,17 @@ impl FrameTargets {
     /// Encodes the copies that make this frame next frame's history.
     pub fn keep_history(&self, encoder: &mut wgpu::CommandEncoder) {
         let whole = wgpu::Extent3d { width: self.width, height: self.height, depth_or_array_layers: 1 };
-        encoder.copy_texture_to_texture(self.color.as_image_copy(), self.history_color.as_image_copy(), whole);
+        encoder.copy_buffer_to_buffer(&self.color, 0, &self.history_color, 0, self.color.size());
         encoder.copy_texture_to_texture(self.normal_distance.as_image_copy(), self.history_normal_distance.as_image_copy(), whole);
     }
 
     /// Copies the final image and the sample count to host memory.
     pub fn read_back(&self, device: &wgpu::Device, queue: &wgpu::Queue) -> Result<(Vec<u8>, u32), RenderError> {
         let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("readback") });
-        encoder.copy_texture_to_buffer(
-            self.final_image.as_image_copy(),
-            wgpu::TexelCopyBufferInfo {
-                buffer: &self.readback,
-                layout: wgpu::TexelCopyBufferLayout { offset: 0, bytes_per_row: Some(self.padded_row), rows_per_image: Some(self.height) },
-            },
-            wgpu::Extent3d { width: self.width, height: self.height, depth_or_array_layers: 1 },
-        );
+        encoder.copy_buffer_to_buffer(&self.final_image, 0, &self.readback, 0, self.final_image.size());
         encoder.copy_buffer_to_buffer(&self.counter, 0, &self.counter_readback, 0, 16);
         let submission = queue.submit([encoder.finish()]);
-        let image = map_read(device, submission.clone(), &self.readback, |bytes| {
-            let row = (self.width * 4) as usize;
-            let mut pixels = Vec::with_capacity(row * self.height as usize);
-            for chunk in bytes.chunks_exact(self.padded_row as usize) {
-                pixels.extend_from_slice(&chunk[..row]);
-            }
-            pixels
-        })?;
+        let image = map_read(device, submission.clone(), &self.readback, |bytes| bytes.to_vec())?;
         let count = map_read(device, submission, &self.counter_readback, |b| u32::from_le_bytes([b[0], b[1], b[2], b[3]]))?;
         Ok((image, count))
     }

@@ -1,7 +1,7 @@
 //! Compaction pass: the sampled pixels become one dense list (stream compaction, the thesis's
 //! CSR reordering), and the count becomes the indirect dispatch of the shading pass.
 
-use crate::render::gpu::{self, UINT};
+use crate::render::gpu;
 use crate::render::timer::PassTimer;
 
 pub const SHADER: &str = include_str!("../../../shaders/compact.wgsl");
@@ -19,7 +19,7 @@ impl CompactPass {
         let layout = gpu::layout(
             device,
             LABEL,
-            &[gpu::uniform(0, false), gpu::texture(1, UINT), gpu::storage_buffer(2, false), gpu::storage_buffer(3, false)],
+            &[gpu::uniform(0, false), gpu::storage_buffer(1, true), gpu::storage_buffer(2, false), gpu::storage_buffer(3, false)],
         );
         let compact = gpu::compute_pipeline(device, LABEL, &module, "main", &layout);
         let args = gpu::compute_pipeline(device, "compact.indirect_args", &module, "indirect_args", &layout);

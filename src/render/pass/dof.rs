@@ -10,11 +10,6 @@ pub fn new(device: &wgpu::Device) -> FramePass {
         device,
         "dof",
         SHADER,
-        &[
-            gpu::uniform(0, false),
-            gpu::texture(1, FLOAT),
-            gpu::texture(2, FLOAT),
-            gpu::storage_texture(3, wgpu::TextureFormat::Rgba16Float),
-        ],
+        &[gpu::uniform(0, false), gpu::storage_buffer(1, true), gpu::texture(2, FLOAT), gpu::storage_buffer(3, false)],
     )
 }

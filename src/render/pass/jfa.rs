@@ -2,7 +2,7 @@
 //! holds its (nearly always exactly) nearest shaded sample. The jump size of each pass comes
 //! from a uniform buffer slot selected by dynamic offset.
 
-use crate::render::gpu::{self, UINT};
+use crate::render::gpu;
 use crate::render::timer::PassTimer;
 
 pub const SHADER: &str = include_str!("../../../shaders/jfa.wgsl");
@@ -23,8 +23,8 @@ impl JfaPass {
             LABEL,
             &[
                 gpu::uniform(0, false),
-                gpu::texture(1, UINT),
-                gpu::storage_texture(2, wgpu::TextureFormat::R32Uint),
+                gpu::storage_buffer(1, true),
+                gpu::storage_buffer(2, false),
                 gpu::uniform(3, true),
             ],
         );

@@ -1,11 +1,10 @@
 //! One file per pass, each beside its WGSL in `shaders/`, in frame order:
-//! gbuffer → sampling → compact → shade → jfa → resolve → dof → output → marker.
+//! gbuffer → sampling → compact → shade → jfa → resolve → dof → output (with the gaze marker).
 
 pub mod compact;
 pub mod dof;
 pub mod gbuffer;
 pub mod jfa;
-pub mod marker;
 pub mod output;
 pub mod resolve;
 pub mod sampling;
@@ -24,7 +23,6 @@ pub fn shaders() -> Vec<(&'static str, String)> {
         ("resolve.wgsl", compose(resolve::SHADER)),
         ("dof.wgsl", compose(dof::SHADER)),
         ("output.wgsl", compose(output::SHADER)),
-        ("marker.wgsl", marker::SHADER.to_string()),
         ("common.wgsl", crate::render::gpu::COMMON.to_string()),
     ]
 }

@@ -7,7 +7,6 @@ use crate::render::gpu::{self, FramePass, FLOAT};
 pub const SHADER: &str = include_str!("../../../shaders/sampling.wgsl");
 
 pub fn new(device: &wgpu::Device) -> FramePass {
-    use wgpu::TextureFormat as F;
     FramePass::new(
         device,
         "sampling",
@@ -18,12 +17,12 @@ pub fn new(device: &wgpu::Device) -> FramePass {
             gpu::texture(2, FLOAT),
             gpu::texture(3, FLOAT),
             gpu::texture(4, FLOAT),
-            gpu::texture(5, FLOAT),
+            gpu::storage_buffer(5, true),
             gpu::texture(6, FLOAT),
-            gpu::storage_texture(7, F::R32Float),
-            gpu::storage_texture(8, F::R32Uint),
-            gpu::storage_texture(9, F::Rgba16Float),
-            gpu::storage_texture(10, F::R32Uint),
+            gpu::storage_buffer(7, false),
+            gpu::storage_buffer(8, false),
+            gpu::storage_buffer(9, false),
+            gpu::storage_buffer(10, false),
         ],
     )
 }

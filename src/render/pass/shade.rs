@@ -1,7 +1,7 @@
 //! Shading pass: the frame's shading where it is needed, either over the compacted list
 //! (indirect dispatch, cost ∝ samples) or over the whole frame with a mask.
 
-use crate::render::gpu::{self, FLOAT, UINT};
+use crate::render::gpu::{self, FLOAT};
 use crate::render::timer::PassTimer;
 
 pub const SHADER: &str = include_str!("../../../shaders/shade.wgsl");
@@ -23,10 +23,10 @@ impl ShadePass {
                 gpu::uniform(0, false),
                 gpu::texture(1, FLOAT),
                 gpu::texture(2, FLOAT),
-                gpu::texture(3, UINT),
+                gpu::storage_buffer(3, true),
                 gpu::storage_buffer(4, true),
                 gpu::storage_buffer(5, true),
-                gpu::storage_texture(6, wgpu::TextureFormat::Rgba16Float),
+                gpu::storage_buffer(6, false),
             ],
         );
         let list = gpu::compute_pipeline(device, "shade.list", &module, "shade_list", &layout);
