@@ -13,7 +13,7 @@ struct Frame {
     to_light: vec4<f32>,
     // rgb: light colour × intensity.
     light: vec4<f32>,
-    // rgb: diffuse albedo; w: ambient as a fraction of the light.
+    // w: ambient as a fraction of the light (xyz unused: albedo is per material).
     albedo_ambient: vec4<f32>,
     // rgb: background colour, linear.
     background: vec4<f32>,
@@ -32,6 +32,71 @@ struct Frame {
     tile: vec4<u32>,
     // Gaze marker: xy centre in pixels; z ring radius, w ring thickness (pixels); z = 0: none.
     marker: vec4<f32>,
+    // x: photon map side; y: a photon's radius, mm (its texel footprint as a disc); z: traversal
+    // start level; w: millimetres per scene unit.
+    photon: vec4<f32>,
+    // x: cut level (the finest level a cluster may come from); y: cut ε (a cluster is used when
+    // its extent < ε × its distance); z: translucency rung (RUNG_*); w: 1 when the pyramid exists.
+    cut: vec4<f32>,
+}
+
+const RUNG_OPAQUE: u32 = 0u;
+const RUNG_NORMAL_BLUR: u32 = 1u;
+const RUNG_SCREEN: u32 = 2u;
+const RUNG_HIERARCHICAL: u32 = 3u;
+const RUNG_BRUTE_FORCE: u32 = 4u;
+
+// One material, as the renderer uploads it (src/render/materials.rs).
+struct Material {
+    // 0 opaque, 1 translucent.
+    kind: u32,
+    // 1 when the scene plan gives this translucent material its subsurface rungs.
+    subsurface: u32,
+    eta: f32,
+    _pad: f32,
+    // Opaque albedo, or the dipole's total diffuse reflectance per channel.
+    albedo: vec4<f32>,
+    // Dipole constants per channel (mm, mm⁻¹): σtr, z_r, z_v, reduced albedo α'.
+    sigma_tr: vec4<f32>,
+    z_r: vec4<f32>,
+    z_v: vec4<f32>,
+    alpha: vec4<f32>,
+}
+
+// A node of the light-space photon pyramid.
+struct PhotonNode {
+    // xyz: flux-weighted mean position (scene units); w: extent (radius around it).
+    pos_extent: vec4<f32>,
+    // rgb: flux (light × mm²); w: scalar weight (luminance of the flux).
+    flux: vec4<f32>,
+}
+
+// Fresnel transmittance of unpolarised light, exact dielectric form (CPU twin:
+// optics::dipole::fresnel_transmittance).
+fn fresnel_transmittance(eta: f32, cos_theta: f32) -> f32 {
+    let ci = clamp(cos_theta, 0.0, 1.0);
+    if (ci <= 0.0) {
+        return 0.0;
+    }
+    let sin2_t = (1.0 - ci * ci) / (eta * eta);
+    if (sin2_t >= 1.0) {
+        return 0.0;
+    }
+    let ct = sqrt(1.0 - sin2_t);
+    let rs = (ci - eta * ct) / (ci + eta * ct);
+    let rp = (eta * ci - ct) / (eta * ci + ct);
+    return 1.0 - 0.5 * (rs * rs + rp * rp);
+}
+
+// Dipole diffuse reflectance R_d(r) per channel, r in mm (corrected eq. 4; CPU twin:
+// optics::dipole::Dipole::rd).
+fn dipole_rd(m: Material, r: f32) -> vec3<f32> {
+    let r2 = r * r;
+    let dr = sqrt(r2 + m.z_r.xyz * m.z_r.xyz);
+    let dv = sqrt(r2 + m.z_v.xyz * m.z_v.xyz);
+    let real = m.z_r.xyz * (m.sigma_tr.xyz * dr + 1.0) * exp(-m.sigma_tr.xyz * dr) / (dr * dr * dr);
+    let virt = m.z_v.xyz * (m.sigma_tr.xyz * dv + 1.0) * exp(-m.sigma_tr.xyz * dv) / (dv * dv * dv);
+    return m.alpha.xyz / (4.0 * 3.14159265) * (real + virt);
 }
 
 const MODE_FOVEATED: u32 = 1u;
@@ -87,6 +152,11 @@ fn seed_dist2(s: u32, p: vec2<i32>) -> i32 {
     }
     let d = unpack_seed(s) - p;
     return d.x * d.x + d.y * d.y;
+}
+
+// Material id stored in the G-buffer albedo alpha ((id + 1)/255; 0 = background).
+fn material_id(albedo_alpha: f32) -> u32 {
+    return u32(round(albedo_alpha * 255.0)) - 1u;
 }
 
 // Direct lighting of a Lambertian surface; CPU twin: optics::shading::lambert.

@@ -1,24 +1,31 @@
-// G-buffer pass: rasterises the mesh once at full resolution. Everything later passes need to
-// decide, shade, reuse or reconstruct a pixel comes from here.
+// G-buffer pass: rasterises every object once at full resolution. Everything later passes need
+// to decide, shade, reuse or reconstruct a pixel comes from here.
+
+@group(0) @binding(1) var<storage, read> materials: array<Material>;
 
 struct VertexIn {
     @location(0) position: vec3<f32>,
     @location(1) normal: vec3<f32>,
+    @location(2) blurred_normal: vec3<f32>,
+    @location(3) material: u32,
 }
 
 struct VertexOut {
     @builtin(position) clip: vec4<f32>,
     @location(0) world: vec3<f32>,
     @location(1) normal: vec3<f32>,
+    @location(2) blurred_normal: vec3<f32>,
+    @location(3) @interpolate(flat) material: u32,
 }
 
 struct GBuffer {
     // xyz: unit normal; w: Euclidean distance from the eye (scene units). Cleared to w = -1.
     @location(0) normal_distance: vec4<f32>,
-    // rgb: albedo; a: 1 where the mesh covers the pixel (cleared to 0).
+    // rgb: the material's albedo; a: (material id + 1)/255, 0 where nothing covers the pixel.
     @location(1) albedo: vec4<f32>,
-    // Where this surface point was on screen last frame, in pixels (motion vector = this − p).
-    @location(2) previous: vec2<f32>,
+    // xyz: the normal blurred over the material's subsurface reach (not renormalised), as
+    // n·0.5 + 0.5.
+    @location(2) blurred_normal: vec4<f32>,
 }
 
 @vertex
@@ -27,6 +34,8 @@ fn vs_main(v: VertexIn) -> VertexOut {
     out.clip = frame.view_proj * vec4<f32>(v.position, 1.0);
     out.world = v.position;
     out.normal = v.normal;
+    out.blurred_normal = v.blurred_normal;
+    out.material = v.material;
     return out;
 }
 
@@ -39,14 +48,7 @@ fn fs_main(in: VertexOut) -> GBuffer {
         n = in.normal / len;
     }
     g.normal_distance = vec4<f32>(n, distance(in.world, frame.eye.xyz));
-    g.albedo = vec4<f32>(frame.albedo_ambient.rgb, 1.0);
-    let prev = frame.prev_view_proj * vec4<f32>(in.world, 1.0);
-    let s = vec2<f32>(frame_size());
-    if (prev.w > 1e-6) {
-        let ndc = prev.xy / prev.w;
-        g.previous = vec2<f32>((ndc.x * 0.5 + 0.5) * s.x, (0.5 - ndc.y * 0.5) * s.y);
-    } else {
-        g.previous = vec2<f32>(-1e9, -1e9);
-    }
+    g.albedo = vec4<f32>(materials[in.material].albedo.rgb, f32(in.material + 1u) / 255.0);
+    g.blurred_normal = vec4<f32>(clamp(in.blurred_normal, vec3<f32>(-1.0), vec3<f32>(1.0)) * 0.5 + 0.5, 0.0);
     return g;
 }

@@ -35,6 +35,7 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
     if (s == NO_SEED) {
         // No sample within jump-flooding reach (a sliver of the object far from every sample):
         // shade the pixel itself. Rare by construction of the reach, so cheap.
+        // (The cheap rung: the albedo is the material's, or its dipole's total reflectance.)
         let a = textureLoad(albedo_tex, p, 0).rgb;
         out_resolved[k] = vec4<f32>(lambert(textureLoad(normal_distance, p, 0).xyz, a), 1.0);
         return;

@@ -4,7 +4,7 @@
 
 @group(0) @binding(1) var normal_distance: texture_2d<f32>;
 @group(0) @binding(2) var albedo_tex: texture_2d<f32>;
-@group(0) @binding(3) var previous_px: texture_2d<f32>;
+@group(0) @binding(3) var<storage, read> materials: array<Material>;
 @group(0) @binding(4) var rank_map: texture_2d<f32>;
 @group(0) @binding(5) var<storage, read> history_color: array<vec4<f32>>;
 @group(0) @binding(6) var history_normal_distance: texture_2d<f32>;
@@ -63,34 +63,66 @@ fn load_clamped(t: texture_2d<f32>, p: vec2<i32>) -> vec4<f32> {
     return textureLoad(t, clamp(p, vec2<i32>(0), frame_size() - 1), 0);
 }
 
+// The 8×8 workgroup's pixels plus a one-pixel border, loaded once and shared: each Sobel tap
+// then reads workgroup memory instead of two textures (9 taps × 2 loads per pixel otherwise).
+var<workgroup> tile_albedo: array<vec4<f32>, 100>;
+var<workgroup> tile_normal: array<vec3<f32>, 100>;
+
+fn load_tile(group_origin: vec2<i32>, local_index: u32) {
+    for (var i = local_index; i < 100u; i += 64u) {
+        let q = group_origin + vec2<i32>(i32(i % 10u), i32(i / 10u)) - 1;
+        let a = load_clamped(albedo_tex, q);
+        // Background (alpha 0) counts as black; the alpha holds the material id, not coverage.
+        let coverage = select(0.0, 1.0, a.a > 0.0);
+        tile_albedo[i] = vec4<f32>(a.rgb * coverage, a.a);
+        tile_normal[i] = load_clamped(normal_distance, q).xyz;
+    }
+}
+
 // Largest per-pixel Sobel gradient of albedo (ΔE per pixel, /10) and normal (radians per
 // pixel, /0.25), each normalised to [0, 1]. Background counts as black with a zero normal, so
-// silhouettes are salient.
-fn saliency(p: vec2<i32>) -> f32 {
-    var gx_lab = vec3<f32>(0.0);
-    var gy_lab = vec3<f32>(0.0);
-    var gx_n = vec3<f32>(0.0);
-    var gy_n = vec3<f32>(0.0);
+// silhouettes are salient. CPU twin: optics::saliency::saliency.
+fn saliency(local: vec2<i32>) -> f32 {
     let kx = array<f32, 9>(-1.0, 0.0, 1.0, -2.0, 0.0, 2.0, -1.0, 0.0, 1.0);
     let ky = array<f32, 9>(-1.0, -2.0, -1.0, 0.0, 0.0, 0.0, 1.0, 2.0, 1.0);
+    var gx_n = vec3<f32>(0.0);
+    var gy_n = vec3<f32>(0.0);
+    var first = vec4<f32>(0.0);
+    var flat_albedo = true;
     for (var j = 0; j < 3; j++) {
         for (var i = 0; i < 3; i++) {
-            let q = p + vec2<i32>(i - 1, j - 1);
-            let a = load_clamped(albedo_tex, q);
-            let lab = to_lab(a.rgb * a.a);
-            let n = load_clamped(normal_distance, q).xyz;
+            let t = u32((local.y + j) * 10 + local.x + i);
+            let n = tile_normal[t];
             let k = j * 3 + i;
-            gx_lab += kx[k] * lab;
-            gy_lab += ky[k] * lab;
             gx_n += kx[k] * n;
             gy_n += ky[k] * n;
+            let a = tile_albedo[t];
+            if (k == 0) {
+                first = a;
+            } else if (any(a != first)) {
+                flat_albedo = false;
+            }
         }
     }
+    var d_albedo = 0.0;
+    // Lab needs cube roots per tap: only worth it where the albedo actually changes.
+    if (!flat_albedo) {
+        var gx_lab = vec3<f32>(0.0);
+        var gy_lab = vec3<f32>(0.0);
+        for (var j = 0; j < 3; j++) {
+            for (var i = 0; i < 3; i++) {
+                let lab = to_lab(tile_albedo[u32((local.y + j) * 10 + local.x + i)].rgb);
+                let k = j * 3 + i;
+                gx_lab += kx[k] * lab;
+                gy_lab += ky[k] * lab;
+            }
+        }
+        let d_lab = sqrt(gx_lab * gx_lab + gy_lab * gy_lab) / 8.0;
+        // Normalisers: optics::saliency::{ALBEDO_FULL, NORMAL_FULL}.
+        d_albedo = max(d_lab.x, max(d_lab.y, d_lab.z)) / 10.0;
+    }
     // Sobel weights sum to 8 across the kernel: /8 gives a per-pixel derivative.
-    let d_lab = sqrt(gx_lab * gx_lab + gy_lab * gy_lab) / 8.0;
     let d_n = sqrt(gx_n * gx_n + gy_n * gy_n) / 8.0;
-    // Normalisers: optics::saliency::{ALBEDO_FULL, NORMAL_FULL}.
-    let d_albedo = max(d_lab.x, max(d_lab.y, d_lab.z)) / 10.0;
     let d_normal = max(d_n.x, max(d_n.y, d_n.z)) / 0.25;
     return clamp(max(d_albedo, d_normal), 0.0, 1.0);
 }
@@ -114,13 +146,23 @@ fn focus_distance() -> f32 {
 }
 
 @compute @workgroup_size(8, 8)
-fn main(@builtin(global_invocation_id) id: vec3<u32>) {
+fn main(
+    @builtin(global_invocation_id) id: vec3<u32>,
+    @builtin(workgroup_id) group: vec3<u32>,
+    @builtin(local_invocation_id) local: vec3<u32>,
+    @builtin(local_invocation_index) local_index: u32,
+) {
+    // Every invocation helps load the tile before any may leave (barriers need uniform flow).
+    if (has_mode(MODE_SALIENCY)) {
+        load_tile(vec2<i32>(group.xy * 8u), local_index);
+    }
+    workgroupBarrier();
     let p = vec2<i32>(id.xy);
     if (!in_frame(p)) {
         return;
     }
     let nd = textureLoad(normal_distance, p, 0);
-    let covered = textureLoad(albedo_tex, p, 0).a > 0.5;
+    let covered = textureLoad(albedo_tex, p, 0).a > 0.0;
     let k = index_of(p);
     if (!covered) {
         out_probability[k] = 0.0;
@@ -130,13 +172,21 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
         return;
     }
     let centre = vec2<f32>(p) + 0.5;
+    // Where this surface point was on screen last frame (static geometry: only the camera moves).
+    let world = frame.eye.xyz + view_ray(centre) * nd.w;
+    let prev_clip = frame.prev_view_proj * vec4<f32>(world, 1.0);
+    var prev = vec2<f32>(-1e9);
+    if (prev_clip.w > 1e-6) {
+        let ndc = prev_clip.xy / prev_clip.w;
+        prev = vec2<f32>((ndc.x * 0.5 + 0.5) * f32(frame.size.x), (0.5 - ndc.y * 0.5) * f32(frame.size.y));
+    }
     let e = eccentricity_deg(centre);
     var f = acuity_probability(frame.acuity.x * e + frame.acuity.y);
-    if (has_mode(MODE_SALIENCY)) {
-        f = max(f, saliency(p));
+    if (has_mode(MODE_SALIENCY) && f < 1.0) {
+        f = max(f, saliency(vec2<i32>(local.xy)));
     }
     if (has_mode(MODE_MOTION)) {
-        let moved = length(textureLoad(previous_px, p, 0).xy - centre);
+        let moved = length(prev - centre);
         f = max(f, clamp(moved / 8.0, 0.0, 1.0));
     }
     if (has_mode(MODE_DOF)) {
@@ -168,12 +218,10 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
     } else if (has_mode(MODE_REPROJECTION) && frame.prev_eye.w > 0.5) {
         // Eq. 4 with |x| and a relative tolerance; the stored depth is last frame's Euclidean
         // distance from last frame's eye.
-        let prev = textureLoad(previous_px, p, 0).xy;
         let uv = prev / vec2<f32>(frame_size());
         if (all(uv >= vec2<f32>(0.0)) && all(uv < vec2<f32>(1.0))) {
             let q = vec2<i32>(floor(prev));
             let prev_distance = textureLoad(history_normal_distance, q, 0).w;
-            let world = frame.eye.xyz + view_ray(centre) * nd.w;
             let now = distance(world, frame.prev_eye.xyz);
             let old = history_color[index_of(q)];
             if (abs(prev_distance - now) < frame.temporal.y * max(now, 1e-6) && old.a < frame.temporal.x) {

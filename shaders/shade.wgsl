@@ -2,6 +2,16 @@
 // compacted list (one invocation per sampled pixel, dispatched indirectly); `shade_grid` over
 // the whole frame, shading every pixel in full mode and only sampled ones otherwise (the
 // uncompacted variant the compaction is measured against).
+//
+// Opaque materials: Lambert. Translucent materials, by the frame's rung (all from the same
+// physical inputs σ's, σa, η and the same light):
+//   opaque       the dipole's total diffuse reflectance as a BRDF albedo, Fresnel in and out;
+//   normal blur  the same with normals pre-blurred over the subsurface reach (seed 001 #6);
+//   screen       irradiance blurred in screen space by the dipole profile (screen_diffusion);
+//   hierarchical the dipole summed over a cut through the light-space photon pyramid (seed 000
+//                eq. 10): a cluster is used when its extent < ε × its distance, or at the cut level;
+//   brute force  the dipole summed over every photon (eq. 8): the model's reference.
+// Radiance is reported ×π like the Lambert term (a white surface facing a unit light is 1).
 
 @group(0) @binding(1) var normal_distance: texture_2d<f32>;
 @group(0) @binding(2) var albedo_tex: texture_2d<f32>;
@@ -9,12 +19,124 @@
 @group(0) @binding(4) var<storage, read> list: array<u32>;
 @group(0) @binding(5) var<storage, read> counter: array<u32, 4>;
 @group(0) @binding(6) var<storage, read_write> out_color: array<vec4<f32>>;
+@group(0) @binding(7) var<storage, read> materials: array<Material>;
+@group(0) @binding(8) var blurred_normal_tex: texture_2d<f32>;
+@group(0) @binding(9) var<storage, read> nodes: array<PhotonNode>;
+@group(0) @binding(10) var<storage, read> diffused: array<vec4<f32>>;
+
+// Index of the first node of pyramid level `level` (level 0: the photon map itself).
+fn level_offset(level: u32) -> u32 {
+    let n = u32(frame.photon.x);
+    var offset = 0u;
+    var side = n;
+    for (var l = 0u; l < level; l++) {
+        offset += side * side;
+        side = max(side / 2u, 1u);
+    }
+    return offset;
+}
+
+fn level_side(level: u32) -> u32 {
+    return max(u32(frame.photon.x) >> level, 1u);
+}
+
+// Distance (mm) at which a cluster's R_d is evaluated. A photon stands for the light entering a
+// whole texel footprint, not a point: evaluating R_d at the distance to the footprint (centre
+// distance softened by the photon's own radius) keeps shading points near a photon from seeing
+// R_d's 1/r³ peak, which would turn a photon map coarser than the mean free path into dots.
+// CPU twin: optics::dipole::softened_distance.
+fn cluster_distance_mm(node: PhotonNode, x_o: vec3<f32>) -> f32 {
+    let r = distance(node.pos_extent.xyz, x_o) * frame.photon.w;
+    let soft = frame.photon.y; // set per frame: the photon radius in mm
+    return sqrt(r * r + soft * soft);
+}
+
+// Σ R_d(|x_c − x_o|) Φ_c over every photon (eq. 8).
+fn gather_all(x_o: vec3<f32>, m: Material) -> vec3<f32> {
+    let n = u32(frame.photon.x);
+    var sum = vec3<f32>(0.0);
+    for (var i = 0u; i < n * n; i++) {
+        let node = nodes[i];
+        if (node.flux.w > 0.0) {
+            sum += dipole_rd(m, cluster_distance_mm(node, x_o)) * node.flux.rgb;
+        }
+    }
+    return sum;
+}
+
+// Σ R_d Φ over a cut through the pyramid (eq. 10), depth first from the start level.
+fn gather_cut(x_o: vec3<f32>, m: Material) -> vec3<f32> {
+    let start = u32(frame.photon.z);
+    let cut_level = u32(frame.cut.x);
+    let eps = frame.cut.y;
+    let roots = level_side(start) * level_side(start);
+    var sum = vec3<f32>(0.0);
+    var stack: array<vec2<u32>, 32>;
+    for (var r = 0u; r < roots; r++) {
+        stack[0] = vec2<u32>(start, r);
+        var sp = 1u;
+        while (sp > 0u) {
+            sp -= 1u;
+            let level = stack[sp].x;
+            let index = stack[sp].y;
+            let node = nodes[level_offset(level) + index];
+            if (node.flux.w <= 0.0) {
+                continue;
+            }
+            let d = distance(node.pos_extent.xyz, x_o);
+            if (level <= cut_level || node.pos_extent.w < eps * d) {
+                sum += dipole_rd(m, cluster_distance_mm(node, x_o)) * node.flux.rgb;
+                continue;
+            }
+            let side = level_side(level);
+            let child_side = level_side(level - 1u);
+            let c = vec2<u32>(index % side, index / side) * 2u;
+            for (var k = 0u; k < 4u; k++) {
+                let cc = c + vec2<u32>(k & 1u, k >> 1u);
+                stack[sp] = vec2<u32>(level - 1u, cc.y * child_side + cc.x);
+                sp += 1u;
+            }
+        }
+    }
+    return sum;
+}
 
 fn shade(p: vec2<i32>) {
     let a = textureLoad(albedo_tex, p, 0);
     var rgb = frame.background.rgb;
-    if (a.a > 0.5) {
-        rgb = lambert(textureLoad(normal_distance, p, 0).xyz, a.rgb);
+    if (a.a > 0.0) {
+        let nd = textureLoad(normal_distance, p, 0);
+        let m = materials[material_id(a.a)];
+        let ambient = m.albedo.rgb * frame.light.rgb * frame.albedo_ambient.w;
+        let l = frame.to_light.xyz;
+        let v = -view_ray(vec2<f32>(p) + 0.5);
+        let cos_i = dot(nd.xyz, l);
+        let ft_out = fresnel_transmittance(m.eta, dot(nd.xyz, v));
+        var rung = u32(frame.cut.z);
+        if (m.subsurface == 0u || (rung >= RUNG_HIERARCHICAL && frame.cut.w < 0.5)) {
+            rung = RUNG_OPAQUE;
+        }
+        if (m.kind == 0u) {
+            rgb = lambert(nd.xyz, m.albedo.rgb);
+        } else if (rung == RUNG_OPAQUE) {
+            rgb = m.albedo.rgb * frame.light.rgb * max(cos_i, 0.0) * fresnel_transmittance(m.eta, cos_i) * ft_out + ambient;
+        } else if (rung == RUNG_NORMAL_BLUR) {
+            let nb = textureLoad(blurred_normal_tex, p, 0).xyz * 2.0 - 1.0;
+            let len = max(length(nb), 1e-6);
+            let cos_b = dot(nb, l);
+            rgb = m.albedo.rgb * frame.light.rgb * max(cos_b, 0.0) * fresnel_transmittance(m.eta, cos_b / len) * ft_out + ambient;
+        } else if (rung == RUNG_SCREEN) {
+            rgb = m.albedo.rgb * diffused[index_of(p)].rgb * ft_out + ambient;
+        } else {
+            let x_o = frame.eye.xyz + view_ray(vec2<f32>(p) + 0.5) * nd.w;
+            var sum: vec3<f32>;
+            if (rung == RUNG_BRUTE_FORCE) {
+                sum = gather_all(x_o, m);
+            } else {
+                sum = gather_cut(x_o, m);
+            }
+            rgb = sum * ft_out + ambient;
+        }
     }
     out_color[index_of(p)] = vec4<f32>(rgb, 0.0);
 }

@@ -158,6 +158,15 @@ struct Knobs {
     sibson_window: Option<u32>,
     #[arg(long)]
     compaction: Option<bool>,
+    /// Translucency rung: opaque, normal_blur, screen, hierarchical, brute_force.
+    #[arg(long, value_parser = parse_enum::<fovea::foveation::Rung>)]
+    translucency: Option<fovea::foveation::Rung>,
+    /// Finest photon-pyramid level a cluster may come from (0–6; 0: single photons).
+    #[arg(long)]
+    cut_level: Option<u32>,
+    /// Use a cluster whole when its extent < ε × its distance.
+    #[arg(long)]
+    cut_epsilon: Option<f64>,
     /// Blur by the eye's depth of field.
     #[arg(long)]
     dof: Option<bool>,
@@ -183,6 +192,9 @@ impl Knobs {
             reconstruction: self.reconstruction,
             sibson_window: self.sibson_window,
             compaction: self.compaction,
+            translucency: self.translucency,
+            cut_level: self.cut_level,
+            cut_epsilon: self.cut_epsilon,
             dof: self.dof,
             overlay: self.overlay,
         }

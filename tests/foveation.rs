@@ -282,7 +282,7 @@ fn saliency_in_the_sampling_map_matches_the_cpu_twin() {
                 for i in 0..3 {
                     let q = ((y + j - 1).clamp(0, hi - 1) * wi + (x + i - 1).clamp(0, wi - 1)) as usize;
                     if img.flags[q] & FLAG_COVERED != 0 {
-                        albedo[(j * 3 + i) as usize] = scene.file.albedo;
+                        albedo[(j * 3 + i) as usize] = scene.materials[0].1.albedo().map(|a| a as f32);
                         let n = img.normal_distance[q];
                         normal[(j * 3 + i) as usize] = [n[0], n[1], n[2]];
                     }

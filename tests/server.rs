@@ -190,7 +190,7 @@ async fn png_frames_are_exactly_the_rendered_pixels() {
     let (h, png) = frame_for(&mut c, gaze(3, 0.25, 0.75)).await;
     assert_eq!(h.codec, Codec::Png);
     let streamed = image::load_from_memory(&png).unwrap().to_rgba8().into_raw();
-    let mut req = FrameRequest::new("bunny", 72, 40);
+    let mut req = FrameRequest::new(fovea::scene::DEFAULT_SCENE, 72, 40);
     req.gaze = [0.25, 0.75];
     req.marker = true;
     let direct = Renderer::new().unwrap().render(&req).unwrap().rgba;

@@ -6,4 +6,4 @@ pub mod reconstruct;
 pub mod reprojection;
 pub mod settings;
 
-pub use settings::{Foveation, Noise, Reconstruction, Settings, PRESETS};
+pub use settings::{Foveation, Noise, Reconstruction, Rung, Settings, Translucency, PRESETS};

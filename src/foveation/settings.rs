@@ -94,6 +94,40 @@ impl Foveation {
     }
 }
 
+/// The translucency ladder, cheapest first; every rung takes the same physical inputs.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Rung {
+    /// The dipole's total diffuse reflectance as an opaque BRDF albedo.
+    Opaque,
+    /// The same with normals blurred over the subsurface reach (seed 001 #6).
+    NormalBlur,
+    /// Irradiance blurred in screen space by the dipole profile.
+    Screen,
+    /// The dipole over a cut through the light-space photon pyramid (seed 000).
+    Hierarchical,
+    /// The dipole over every photon: the model's reference.
+    BruteForce,
+}
+
+impl Rung {
+    pub const ALL: [Rung; 5] = [Rung::Opaque, Rung::NormalBlur, Rung::Screen, Rung::Hierarchical, Rung::BruteForce];
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Translucency {
+    pub rung: Rung,
+    /// The finest pyramid level a cluster may come from (0: single photons).
+    pub cut_level: u32,
+    /// A cluster is used whole when its extent is below ε × its distance.
+    pub cut_epsilon: f32,
+}
+
+impl Translucency {
+    pub const DEFAULT: Translucency = Translucency { rung: Rung::Hierarchical, cut_level: 0, cut_epsilon: 0.5 };
+}
+
 /// Overlays drawn over the frame for people looking at how it was made.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
@@ -111,6 +145,7 @@ pub enum Overlay {
 pub struct Settings {
     pub preset: String,
     pub foveation: Foveation,
+    pub translucency: Translucency,
     /// Blur the frame by the eye's depth of field for the current pupil and gaze depth.
     pub dof: bool,
     pub overlay: Overlay,
@@ -140,7 +175,12 @@ impl Settings {
             },
             _ => return None,
         };
-        Some(Settings { preset: name.to_string(), foveation, dof: false, overlay: Overlay::None })
+        let translucency = match name {
+            "reference" => Translucency { rung: Rung::BruteForce, ..Translucency::DEFAULT },
+            "fast" => Translucency { cut_level: 1, cut_epsilon: 1.0, ..Translucency::DEFAULT },
+            _ => Translucency::DEFAULT,
+        };
+        Some(Settings { preset: name.to_string(), foveation, translucency, dof: false, overlay: Overlay::None })
     }
 }
 
@@ -151,7 +191,17 @@ impl Settings {
         if let Some(name) = &patch.preset {
             *self = Settings::preset(name).ok_or_else(|| name.clone())?;
         }
-        let before = self.foveation;
+        let before = (self.foveation, self.translucency);
+        let t = &mut self.translucency;
+        if let Some(v) = patch.translucency {
+            t.rung = v;
+        }
+        if let Some(v) = patch.cut_level {
+            t.cut_level = v;
+        }
+        if let Some(v) = patch.cut_epsilon {
+            t.cut_epsilon = v as f32;
+        }
         let f = &mut self.foveation;
         if let Some(v) = patch.foveation {
             f.enabled = v;
@@ -199,7 +249,7 @@ impl Settings {
             self.overlay = v;
         }
         // Hand-tuned knobs make this a custom point near the named preset: say so.
-        if self.foveation != before && !self.preset.ends_with('*') {
+        if (self.foveation, self.translucency) != before && !self.preset.ends_with('*') {
             self.preset.push('*');
         }
         Ok(())

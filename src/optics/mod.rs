@@ -5,3 +5,4 @@ pub mod color;
 pub mod shading;
 pub mod acuity;
 pub mod saliency;
+pub mod dipole;

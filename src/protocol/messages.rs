@@ -150,6 +150,12 @@ pub struct SettingsPatch {
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub compaction: Option<bool>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub translucency: Option<crate::foveation::Rung>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub cut_level: Option<u32>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub cut_epsilon: Option<f64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
     pub dof: Option<bool>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub overlay: Option<crate::foveation::settings::Overlay>,

@@ -152,6 +152,12 @@ fn validate_settings(p: &SettingsPatch) -> Result<(), ProtocolError> {
     if let Some(v) = p.max_history_age {
         in_range("max_history_age", f64::from(v), 0.0, 1000.0)?;
     }
+    if let Some(v) = p.cut_level {
+        in_range("cut_level", f64::from(v), 0.0, 6.0)?;
+    }
+    if let Some(v) = p.cut_epsilon {
+        in_range("cut_epsilon", v, 0.0, 10.0)?;
+    }
     if let Some(v) = p.sibson_window {
         in_range("sibson_window", f64::from(v), 0.0, 32.0)?;
     }

@@ -1,6 +1,6 @@
-//! A CPU rasteriser for the forward pass: the same camera, the same Lambert shading
-//! (`optics::shading::lambert`), pixel centres sampled, perspective-correct normals. Slow and
-//! simple on purpose; tests hold the GPU image to it.
+//! A CPU rasteriser for opaque scenes: the same camera, the same Lambert shading
+//! (`optics::shading::lambert`) with each vertex's material albedo, pixel centres sampled,
+//! perspective-correct normals. Slow and simple on purpose; tests hold the GPU image to it.
 
 use glam::{Vec3, Vec4, Vec4Swizzles};
 
@@ -20,6 +20,7 @@ pub fn render_reference(scene: &Scene, width: u32, height: u32, to_light: Option
     let n = (width * height) as usize;
     let mut depth = vec![f32::INFINITY; n];
     let mut normal = vec![Vec3::ZERO; n];
+    let mut material = vec![0u32; n];
     let view_proj = scene.file.camera.view_proj(width, height);
     let mesh = &scene.mesh;
     let clip: Vec<Vec4> = mesh.positions.iter().map(|p| view_proj * p.extend(1.0)).collect();
@@ -65,6 +66,7 @@ pub fn render_reference(scene: &Scene, width: u32, height: u32, to_light: Option
                 // Perspective-correct: weight by 1/w, as the GPU interpolates varyings.
                 let pw = [b[0] / c[0].w, b[1] / c[1].w, b[2] / c[2].w];
                 let sum = pw[0] + pw[1] + pw[2];
+                material[k] = mesh.material[idx[0]];
                 normal[k] = (mesh.normals[idx[0]] * pw[0]
                     + mesh.normals[idx[1]] * pw[1]
                     + mesh.normals[idx[2]] * pw[2])
@@ -82,7 +84,7 @@ pub fn render_reference(scene: &Scene, width: u32, height: u32, to_light: Option
             let c = lambert(
                 normal[k],
                 to_light,
-                Vec3::from(scene.file.albedo),
+                Vec3::from(scene.materials[material[k] as usize].1.albedo().map(|a| a as f32)),
                 Vec3::from(light.color) * light.intensity,
                 scene.file.ambient,
             );

@@ -55,7 +55,7 @@ impl Gpu {
             .map_err(|source| RenderError::Device { adapter: info.name.clone(), source })?;
         // Errors are caught per frame with error scopes; anything that escapes one is logged
         // rather than panicking the render thread that every session shares.
-        device.on_uncaptured_error(Arc::new(|e| tracing::error!("uncaptured GPU error: {e}")));
+        device.on_uncaptured_error(Arc::new(|e| tracing::error!("uncaptured GPU error: {e:?}")));
         tracing::info!(
             name = %info.name,
             backend = ?info.backend,

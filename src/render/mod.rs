@@ -9,6 +9,7 @@
 pub mod cpu_reference;
 mod device;
 pub mod gpu;
+pub mod materials;
 pub mod pass;
 mod renderer;
 mod targets;

@@ -7,6 +7,8 @@ use super::gpu::{self, FramePass};
 use super::pass::compact::CompactPass;
 use super::pass::gbuffer::{GBufferPass, GBufferTargets, MeshBuffers};
 use super::pass::jfa::JfaPass;
+use super::pass::photons::{PhotonMap, PhotonPass};
+use super::pass::screen_diffusion::ScreenDiffusionPass;
 use super::pass::shade::ShadePass;
 use super::pass::{dof, output, resolve, sampling};
 use super::targets::{map_read, FrameTargets};
@@ -15,11 +17,11 @@ use super::uniforms::*;
 use super::{Gpu, RenderError};
 use crate::foveation::rank_map;
 use crate::foveation::reprojection::DEFAULT_EPSILON;
-use crate::foveation::{Noise, Reconstruction, Settings};
+use crate::foveation::{Noise, Reconstruction, Rung, Settings};
 use crate::optics::acuity::{mar_deg, ProbabilityForm, Viewing};
 use crate::optics::color::srgb8_to_linear;
 use crate::protocol::Display;
-use crate::scene::{Camera, Scene};
+use crate::scene::{Camera, Plan, Scene};
 
 /// Largest side a frame may have; matches wgpu's default 2-D texture limit.
 pub const MAX_SIDE: u32 = 8192;
@@ -49,6 +51,8 @@ pub struct FrameRequest {
     pub camera: Option<Camera>,
     /// Whose frame sequence this is: history (reprojection) is kept per stream.
     pub stream: u64,
+    /// Seconds into the stream, for animated lights.
+    pub time_s: f64,
 }
 
 impl FrameRequest {
@@ -65,6 +69,7 @@ impl FrameRequest {
             to_light: None,
             camera: None,
             stream: 0,
+            time_s: 0.0,
         }
     }
 }
@@ -94,6 +99,8 @@ pub struct Inspection {
     pub color: Vec<[f32; 4]>,
     pub resolved: Vec<[f32; 4]>,
     pub normal_distance: Vec<[f32; 4]>,
+    /// Photons (pyramid level 0) as [x, y, z, extent, Φr, Φg, Φb, weight]; empty without any.
+    pub photons: Vec<[f32; 8]>,
 }
 
 pub(crate) struct Passes {
@@ -105,6 +112,20 @@ pub(crate) struct Passes {
     pub resolve: FramePass,
     pub dof: FramePass,
     pub output: FramePass,
+    pub photons: PhotonPass,
+    pub screen_diffusion: ScreenDiffusionPass,
+}
+
+/// A scene on the GPU: its mesh, materials, and photon pyramid if anything is translucent.
+pub(crate) struct SceneGpu {
+    pub scene: Scene,
+    pub mesh: MeshBuffers,
+    /// Every translucent material marked subsurface (for the G-buffer and the photon map).
+    pub materials: wgpu::Buffer,
+    pub reach: wgpu::Buffer,
+    pub photons: Option<PhotonMap>,
+    /// Bound in place of the pyramid when the scene has none.
+    pub no_photons: wgpu::Buffer,
 }
 
 type TargetKey = (u64, String, u32, u32);
@@ -114,9 +135,10 @@ pub struct Renderer {
     gpu: Gpu,
     passes: Passes,
     rank_map: wgpu::TextureView,
-    scenes: HashMap<String, (Scene, MeshBuffers)>,
+    scenes: HashMap<String, SceneGpu>,
     targets: Vec<(TargetKey, FrameTargets)>,
     timer: PassTimer,
+    pyramid_builds: u64,
 }
 
 impl Renderer {
@@ -135,6 +157,8 @@ impl Renderer {
             resolve: resolve::new(d),
             dof: dof::new(d),
             output: output::new(d),
+            photons: PhotonPass::new(d),
+            screen_diffusion: ScreenDiffusionPass::new(d),
         };
         let side = rank_map::TILE;
         let rank = gpu::texture_2d(
@@ -151,7 +175,7 @@ impl Renderer {
             wgpu::Extent3d { width: side, height: side, depth_or_array_layers: 1 },
         );
         let timer = PassTimer::new(d, &gpu.queue);
-        Renderer { passes, rank_map: gpu::view(&rank), gpu, scenes: HashMap::new(), targets: Vec::new(), timer }
+        Renderer { passes, rank_map: gpu::view(&rank), gpu, scenes: HashMap::new(), targets: Vec::new(), timer, pyramid_builds: 0 }
     }
 
     pub fn adapter(&self) -> String {
@@ -167,12 +191,26 @@ impl Renderer {
     pub fn load_scene(&mut self, name: &str) -> Result<&Scene, RenderError> {
         if !self.scenes.contains_key(name) {
             let scene = Scene::builtin(name)?;
-            let mesh = self.passes.gbuffer.upload(&self.gpu.device, &scene);
-            tracing::info!(scene = name, triangles = scene.mesh.triangle_count(), "scene loaded");
-            self.scenes.insert(name.to_string(), (scene, mesh));
+            let d = &self.gpu.device;
+            let mesh = self.passes.gbuffer.upload(d, &scene);
+            let materials = super::materials::upload(d, "materials.scene", &super::materials::gpu_materials(&scene, None));
+            let reach = super::materials::upload_reach(d, &scene);
+            let photons = scene.has_translucency().then(|| self.passes.photons.create_map(d, &materials));
+            let no_photons = d.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("pyramid.none"),
+                size: 32,
+                usage: wgpu::BufferUsages::STORAGE,
+                mapped_at_creation: false,
+            });
+            tracing::info!(scene = name, triangles = scene.mesh.triangle_count(), translucent = scene.has_translucency(), "scene loaded");
+            self.scenes.insert(name.to_string(), SceneGpu { scene, mesh, materials, reach, photons, no_photons });
         }
-        let (scene, _) = &self.scenes[name];
-        Ok(scene)
+        Ok(&self.scenes[name].scene)
+    }
+
+    /// How many times a photon pyramid has been built (static scenes: once per scene).
+    pub fn pyramid_builds(&self) -> u64 {
+        self.pyramid_builds
     }
 
     /// Frees a stream's targets and history (a session ended).
@@ -188,25 +226,47 @@ impl Renderer {
         self.load_scene(&req.scene)?;
         let started = Instant::now();
         let ti = self.target_index(req.stream, &req.scene, w, h);
-        let (scene, mesh) = &self.scenes[&req.scene];
+        let rung = req.settings.translucency.rung;
+        let to_light = {
+            let scene = &self.scenes[&req.scene].scene;
+            req.to_light.and_then(|l| l.try_normalize()).unwrap_or_else(|| scene.file.light.to_light_at(req.time_s))
+        };
+        let sg = self.scenes.get_mut(&req.scene).expect("loaded above");
+        let mut photon_encoder = None;
+        self.timer.begin_frame();
+        if let Some(map) = sg.photons.as_mut() {
+            let plan_needs = self.targets[ti].1.needs_dipole;
+            if rung >= Rung::Hierarchical && plan_needs && map.built_for != Some(to_light) {
+                let mut enc = self.gpu.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("photons") });
+                self.passes.photons.build(&self.gpu.queue, &mut enc, map, &sg.scene, &sg.mesh, to_light, &mut self.timer);
+                self.pyramid_builds += 1;
+                photon_encoder = Some(enc.finish());
+            }
+        }
+        let sg = &self.scenes[&req.scene];
+        let (scene, mesh) = (&sg.scene, &sg.mesh);
+        let pyramid_ready = sg.photons.as_ref().is_some_and(|m| m.built_for == Some(to_light));
         let t = &self.targets[ti].1;
         let device = &self.gpu.device;
         let queue = &self.gpu.queue;
         let settings = &req.settings;
         let fov = &settings.foveation;
         let camera = req.camera.unwrap_or(scene.file.camera);
-        let uniform = frame_uniform(scene, &camera, req, t);
+        let uniform = frame_uniform(scene, &camera, req, t, to_light, pyramid_ready);
         queue.write_buffer(&t.uniform, 0, bytemuck::bytes_of(&uniform));
 
         let scope = device.push_error_scope(wgpu::ErrorFilter::Validation);
         let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("frame") });
-        let (nd, albedo, previous) = t.gbuffer_views();
-        let targets = GBufferTargets { normal_distance: &nd, albedo: &albedo, previous: &previous, depth: &t.depth };
+        let (nd, albedo, blurred) = t.gbuffer_views();
+        let targets = GBufferTargets { normal_distance: &nd, albedo: &albedo, blurred_normal: &blurred, depth: &t.depth };
         let p = &self.passes;
         let size = (w, h);
         let timer = &mut self.timer;
-        timer.begin_frame();
         p.gbuffer.encode(&mut encoder, &targets, &t.bind.gbuffer, mesh, timer);
+        if rung == Rung::Screen && t.needs_dipole {
+            let [a, b, c] = &t.bind.screen_diffusion;
+            p.screen_diffusion.encode(&mut encoder, [a, b, c], size, timer);
+        }
         if fov.enabled {
             encoder.clear_buffer(&t.counter, 0, None);
             p.sampling.encode(&mut encoder, &t.bind.sampling, size, timer);
@@ -236,7 +296,7 @@ impl Renderer {
         p.output.encode(&mut encoder, output, size, timer);
         t.keep_history(&mut encoder);
         timer.resolve(&mut encoder);
-        let submission = queue.submit([encoder.finish()]);
+        let submission = queue.submit(photon_encoder.into_iter().chain([encoder.finish()]));
         device
             .poll(wgpu::PollType::Wait { submission_index: Some(submission.clone()), timeout: None })
             .map_err(|e| RenderError::Gpu(format!("waiting for the frame: {e}")))?;
@@ -280,6 +340,14 @@ impl Renderer {
             color: quads(buf(&t.color)?),
             resolved: quads(buf(&t.resolved)?),
             normal_distance: quads(read_texture(&self.gpu, &t.normal_distance, 16)?),
+            photons: match self.scenes.get(scene).and_then(|s| s.photons.as_ref()) {
+                Some(map) => {
+                    let n = (super::pass::photons::SIDE * super::pass::photons::SIDE) as usize;
+                    let all: Vec<[f32; 8]> = bytemuck::pod_collect_to_vec(&buf(&map.nodes)?);
+                    all[..n].to_vec()
+                }
+                None => Vec::new(),
+            },
         })
     }
 
@@ -291,7 +359,11 @@ impl Renderer {
         if self.targets.len() >= TARGET_CACHE {
             self.targets.remove(0);
         }
-        let t = FrameTargets::new(&self.gpu.device, &self.passes, &self.rank_map, w, h);
+        let sg = &self.scenes[scene];
+        let plan = Plan::of(&sg.scene, w, h);
+        let materials = super::materials::upload(&self.gpu.device, "materials.planned", &super::materials::gpu_materials(&sg.scene, Some(&plan)));
+        let mut t = FrameTargets::new(&self.gpu.device, &self.passes, &self.rank_map, sg, materials, w, h);
+        t.needs_dipole = plan.photon_pass;
         self.targets.push((key, t));
         self.targets.len() - 1
     }
@@ -305,7 +377,7 @@ fn tile_offset(frame: u32) -> [u32; 2] {
     [((n / G).fract() * side) as u32, ((n / (G * G)).fract() * side) as u32]
 }
 
-fn frame_uniform(scene: &Scene, camera: &Camera, req: &FrameRequest, t: &FrameTargets) -> FrameUniform {
+fn frame_uniform(scene: &Scene, camera: &Camera, req: &FrameRequest, t: &FrameTargets, to_light: Vec3, pyramid_ready: bool) -> FrameUniform {
     let (w, h) = (req.width, req.height);
     let view_proj = camera.view_proj(w, h);
     let eye = Vec3::from(camera.eye);
@@ -332,8 +404,8 @@ fn frame_uniform(scene: &Scene, camera: &Camera, req: &FrameRequest, t: &FrameTa
     let w_min = viewing.pixel_angle_deg();
     let w_far = mar_deg(viewing.max_eccentricity_deg(gaze_px), f64::from(fov.mar_slope), f64::from(fov.mar_w0_deg));
     let lighting = &scene.file.light;
-    let to_light = req.to_light.and_then(|l| l.try_normalize()).unwrap_or(Vec3::from(lighting.to_light));
     let light = Vec3::from(lighting.color) * lighting.intensity;
+    let photon_radius_mm = super::pass::photons::photon_radius_mm(scene);
     let target_distance = (Vec3::from(camera.target) - eye).length();
     let offset = tile_offset(t.frame_index);
     let overlay = match s.overlay {
@@ -345,11 +417,11 @@ fn frame_uniform(scene: &Scene, camera: &Camera, req: &FrameRequest, t: &FrameTa
         view_proj: view_proj.to_cols_array_2d(),
         inv_view_proj: view_proj.inverse().to_cols_array_2d(),
         prev_view_proj: prev_view_proj.to_cols_array_2d(),
-        eye: eye.extend(scene.file.metres_per_unit).to_array(),
+        eye: eye.extend(scene.metres_per_unit() as f32).to_array(),
         prev_eye: prev_eye.extend(history).to_array(),
         to_light: to_light.extend(0.0).to_array(),
         light: light.extend(0.0).to_array(),
-        albedo_ambient: Vec3::from(scene.file.albedo).extend(scene.file.ambient).to_array(),
+        albedo_ambient: [0.0, 0.0, 0.0, scene.file.ambient],
         background: Vec3::from(scene.file.background_srgb.map(srgb8_to_linear)).extend(1.0).to_array(),
         size: [w, h, t.frame_index, mode],
         gaze: [gaze_px[0] as f32, gaze_px[1] as f32, req.pupil_mm, target_distance],
@@ -375,6 +447,24 @@ fn frame_uniform(scene: &Scene, camera: &Camera, req: &FrameRequest, t: &FrameTa
         } else {
             [0.0; 4]
         },
+        photon: [
+            super::pass::photons::SIDE as f32,
+            photon_radius_mm as f32,
+            super::pass::photons::START_LEVEL as f32,
+            scene.file.mm_per_unit as f32,
+        ],
+        cut: [
+            s.translucency.cut_level.min(super::pass::photons::START_LEVEL) as f32,
+            s.translucency.cut_epsilon.max(0.0),
+            match s.translucency.rung {
+                Rung::Opaque => 0.0,
+                Rung::NormalBlur => 1.0,
+                Rung::Screen => 2.0,
+                Rung::Hierarchical => 3.0,
+                Rung::BruteForce => 4.0,
+            },
+            if pyramid_ready { 1.0 } else { 0.0 },
+        ],
     }
 }
 

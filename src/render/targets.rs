@@ -5,7 +5,7 @@
 
 use super::gpu::{self, view};
 use super::pass::{gbuffer, jfa};
-use super::renderer::Passes;
+use super::renderer::{Passes, SceneGpu};
 use super::uniforms::FrameUniform;
 use super::RenderError;
 use crate::foveation::reconstruct::jfa_steps;
@@ -20,7 +20,7 @@ pub struct FrameTargets {
     pub depth: wgpu::TextureView,
     pub normal_distance: wgpu::Texture,
     pub albedo: wgpu::Texture,
-    pub previous: wgpu::Texture,
+    pub blurred_normal: wgpu::Texture,
     pub history_normal_distance: wgpu::Texture,
     /// Per-pixel buffers, row-major.
     pub probability: wgpu::Buffer,
@@ -45,8 +45,13 @@ pub struct FrameTargets {
     pub prev_eye: glam::Vec3,
     pub has_history: bool,
     pub frame_index: u32,
+    /// The scene plan at this size gives some material its subsurface rungs.
+    pub needs_dipole: bool,
+    /// The scene's materials as this frame size's plan shades them.
+    _materials: wgpu::Buffer,
     /// Owned here; passes reach them through bind groups.
     _dof: wgpu::Buffer,
+    _diffused: [wgpu::Buffer; 2],
     jump: wgpu::Buffer,
 }
 
@@ -64,10 +69,20 @@ pub struct Bindings {
     pub output_color: wgpu::BindGroup,
     pub output_resolved: wgpu::BindGroup,
     pub output_dof: wgpu::BindGroup,
+    /// Irradiance → a, a → b (horizontal), b → a (vertical).
+    pub screen_diffusion: [wgpu::BindGroup; 3],
 }
 
 impl FrameTargets {
-    pub fn new(device: &wgpu::Device, passes: &Passes, rank_map: &wgpu::TextureView, width: u32, height: u32) -> FrameTargets {
+    pub fn new(
+        device: &wgpu::Device,
+        passes: &Passes,
+        rank_map: &wgpu::TextureView,
+        scene: &SceneGpu,
+        materials: wgpu::Buffer,
+        width: u32,
+        height: u32,
+    ) -> FrameTargets {
         let size = (width, height);
         let pixels = u64::from(width) * u64::from(height);
         let tex = |label, format, usage| gpu::texture_2d(device, label, size, format, usage);
@@ -75,7 +90,7 @@ impl FrameTargets {
         let depth = tex("gbuffer.depth", gbuffer::DEPTH, U::RENDER_ATTACHMENT);
         let normal_distance = tex("gbuffer.normal_distance", gbuffer::NORMAL_DISTANCE, attach);
         let albedo = tex("gbuffer.albedo", gbuffer::ALBEDO, attach);
-        let previous = tex("gbuffer.previous", gbuffer::PREVIOUS, attach);
+        let blurred_normal = tex("gbuffer.blurred_normal", gbuffer::BLURRED_NORMAL, attach);
         let history_normal_distance = tex("history.normal_distance", gbuffer::NORMAL_DISTANCE, U::TEXTURE_BINDING | U::COPY_DST);
 
         let buffer = |label, size: u64, usage| device.create_buffer(&wgpu::BufferDescriptor { label: Some(label), size, usage, mapped_at_creation: false });
@@ -90,6 +105,7 @@ impl FrameTargets {
         let resolved = per_pixel("resolve.color", 16);
         let dof = per_pixel("dof.color", 16);
         let final_image = per_pixel("output.final", 4);
+        let diffused = [per_pixel("screen_diffusion.a", 16), per_pixel("screen_diffusion.b", 16)];
         let list = per_pixel("compact.list", 4);
         let counter = buffer("compact.counter", 16, B::STORAGE | B::INDIRECT | B::COPY_SRC | B::COPY_DST);
         let uniform = buffer("frame.uniform", std::mem::size_of::<FrameUniform>() as u64, B::UNIFORM | B::COPY_DST);
@@ -100,19 +116,40 @@ impl FrameTargets {
         let counter_readback = buffer("compact.counter.readback", 16, B::COPY_DST | B::MAP_READ);
 
         let u = uniform.as_entire_binding();
-        let (nd, alb, prev, hnd) = (view(&normal_distance), view(&albedo), view(&previous), view(&history_normal_distance));
+        let (nd, alb, blur, hnd) = (view(&normal_distance), view(&albedo), view(&blurred_normal), view(&history_normal_distance));
         use wgpu::BindingResource::TextureView as T;
         fn b(buf: &wgpu::Buffer) -> wgpu::BindingResource<'_> {
             buf.as_entire_binding()
         }
-        let gbuffer_bg = gpu::bind(device, "gbuffer", &passes.gbuffer.layout, &[u.clone()]);
+        let gbuffer_bg = gpu::bind(device, "gbuffer", &passes.gbuffer.layout, &[u.clone(), b(&scene.materials)]);
         let sampling = passes.sampling.bind(
             device,
-            &[u.clone(), T(&nd), T(&alb), T(&prev), T(rank_map), b(&history_color), T(&hnd), b(&probability), b(&flags), b(&color), b(&seeds)],
+            &[u.clone(), T(&nd), T(&alb), b(&materials), T(rank_map), b(&history_color), T(&hnd), b(&probability), b(&flags), b(&color), b(&seeds)],
         );
         let compact = gpu::bind(device, "compact", &passes.compact.layout, &[u.clone(), b(&flags), b(&list), b(&counter)]);
-        let shade =
-            gpu::bind(device, "shade", &passes.shade.layout, &[u.clone(), T(&nd), T(&alb), b(&flags), b(&list), b(&counter), b(&color)]);
+        let nodes = scene.photons.as_ref().map(|p| &p.nodes).unwrap_or(&scene.no_photons);
+        let shade = gpu::bind(
+            device,
+            "shade",
+            &passes.shade.layout,
+            &[
+                u.clone(),
+                T(&nd),
+                T(&alb),
+                b(&flags),
+                b(&list),
+                b(&counter),
+                b(&color),
+                b(&materials),
+                T(&blur),
+                b(nodes),
+                b(&diffused[0]),
+            ],
+        );
+        let diffusion = |src: &wgpu::Buffer, dst: &wgpu::Buffer| {
+            gpu::bind(device, "screen_diffusion", &passes.screen_diffusion.layout, &[u.clone(), T(&nd), T(&alb), b(&materials), b(&scene.reach), b(src), b(dst)])
+        };
+        let screen_diffusion = [diffusion(&diffused[1], &diffused[0]), diffusion(&diffused[0], &diffused[1]), diffusion(&diffused[1], &diffused[0])];
         let jump_binding = wgpu::BindingResource::Buffer(wgpu::BufferBinding { buffer: &jump, offset: 0, size: wgpu::BufferSize::new(16) });
         // Step 0 reads the seeds; then a → b, b → a, …
         let jfa_groups: Vec<wgpu::BindGroup> = (0..steps.len())
@@ -142,6 +179,7 @@ impl FrameTargets {
             output_color: output(&color),
             output_resolved: output(&resolved),
             output_dof: output(&dof),
+            screen_diffusion,
         };
         FrameTargets {
             width,
@@ -150,7 +188,7 @@ impl FrameTargets {
             depth: view(&depth),
             normal_distance,
             albedo,
-            previous,
+            blurred_normal,
             history_normal_distance,
             probability,
             flags,
@@ -170,7 +208,10 @@ impl FrameTargets {
             prev_eye: glam::Vec3::ZERO,
             has_history: false,
             frame_index: 0,
+            needs_dipole: false,
+            _materials: materials,
             _dof: dof,
+            _diffused: diffused,
             jump,
         }
     }
@@ -195,7 +236,7 @@ impl FrameTargets {
     }
 
     pub fn gbuffer_views(&self) -> (wgpu::TextureView, wgpu::TextureView, wgpu::TextureView) {
-        (view(&self.normal_distance), view(&self.albedo), view(&self.previous))
+        (view(&self.normal_distance), view(&self.albedo), view(&self.blurred_normal))
     }
 
     /// Encodes the copies that make this frame next frame's history.

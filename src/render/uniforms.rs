@@ -33,13 +33,15 @@ pub struct FrameUniform {
     pub temporal: [f32; 4],
     pub tile: [u32; 4],
     pub marker: [f32; 4],
+    pub photon: [f32; 4],
+    pub cut: [f32; 4],
 }
 
 #[cfg(test)]
 mod tests {
     #[test]
     fn uniform_size_matches_the_wgsl_struct() {
-        // 3 mat4x4 + 13 vec4: any drift from common.wgsl shows up here first.
-        assert_eq!(std::mem::size_of::<super::FrameUniform>(), 3 * 64 + 13 * 16);
+        // 3 mat4x4 + 15 vec4: any drift from common.wgsl shows up here first.
+        assert_eq!(std::mem::size_of::<super::FrameUniform>(), 3 * 64 + 15 * 16);
     }
 }

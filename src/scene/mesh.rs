@@ -1,10 +1,15 @@
 use glam::Vec3;
 
 /// A triangle mesh ready for the GPU: one normal per vertex, counter-clockwise front faces.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, Default, PartialEq)]
 pub struct Mesh {
     pub positions: Vec<Vec3>,
     pub normals: Vec<Vec3>,
+    /// Normals averaged over the material's subsurface reach, not renormalised: the shortening
+    /// is what softens the lighting (seed 001, normal-blur SSS).
+    pub blurred_normals: Vec<Vec3>,
+    /// Material id of each vertex.
+    pub material: Vec<u32>,
     pub indices: Vec<u32>,
 }
 
@@ -22,8 +27,45 @@ impl Mesh {
         }
         // A vertex used by no triangle (or only by zero-area ones) gets a harmless up vector
         // instead of a NaN from normalising zero.
-        let normals = normals.into_iter().map(|n| n.try_normalize().unwrap_or(Vec3::Y)).collect();
-        Mesh { positions, normals, indices }
+        let normals: Vec<Vec3> = normals.into_iter().map(|n| n.try_normalize().unwrap_or(Vec3::Y)).collect();
+        let n = positions.len();
+        Mesh { positions, blurred_normals: normals.clone(), normals, material: vec![0; n], indices }
+    }
+
+    /// Averages each vertex's normal with its neighbours within `radius` (weights fall as
+    /// (1 − d/radius)²). A radius below the mesh's detail leaves the normals as they are.
+    pub fn with_blurred_normals(mut self, radius: f32) -> Mesh {
+        if radius <= 0.0 || !radius.is_finite() {
+            return self;
+        }
+        self.blurred_normals = self
+            .positions
+            .iter()
+            .map(|p| {
+                let mut sum = Vec3::ZERO;
+                let mut weight = 0.0;
+                for (q, n) in self.positions.iter().zip(&self.normals) {
+                    let d = p.distance(*q);
+                    if d < radius {
+                        let w = (1.0 - d / radius).powi(2);
+                        sum += w * *n;
+                        weight += w;
+                    }
+                }
+                if weight > 0.0 { sum / weight } else { Vec3::ZERO }
+            })
+            .collect();
+        self
+    }
+
+    /// Appends another mesh, tagging its vertices with `material`.
+    pub fn append(&mut self, other: Mesh, material: u32) {
+        let base = self.positions.len() as u32;
+        self.indices.extend(other.indices.iter().map(|i| i + base));
+        self.material.extend(std::iter::repeat_n(material, other.positions.len()));
+        self.positions.extend(other.positions);
+        self.normals.extend(other.normals);
+        self.blurred_normals.extend(other.blurred_normals);
     }
 
     pub fn triangle_count(&self) -> u32 {
@@ -46,5 +88,17 @@ mod tests {
         let m = Mesh::with_smooth_normals(vec![Vec3::ZERO, Vec3::X, Vec3::Y, Vec3::Z * 5.0], vec![0, 1, 2]);
         assert_eq!(&m.normals[..3], &[Vec3::Z; 3]);
         assert_eq!(m.normals[3], Vec3::Y, "unused vertex gets a finite fallback normal");
+    }
+
+    #[test]
+    fn blurring_shortens_normals_on_curved_surfaces_only() {
+        // Two triangles folded 90° along x: blurred normals at the fold lean between the faces.
+        let p = vec![Vec3::ZERO, Vec3::X, Vec3::new(0.0, 0.0, -1.0), Vec3::new(0.0, -1.0, 0.0)];
+        let m = Mesh::with_smooth_normals(p, vec![0, 1, 2, 0, 3, 1]).with_blurred_normals(3.0);
+        for n in &m.blurred_normals {
+            assert!(n.is_finite() && n.length() < 1.0 && n.length() > 0.5, "{n:?}");
+        }
+        let flat = Mesh::with_smooth_normals(vec![Vec3::ZERO, Vec3::X, Vec3::Y], vec![0, 1, 2]).with_blurred_normals(5.0);
+        assert!(flat.blurred_normals.iter().all(|n| (*n - Vec3::Z).length() < 1e-6));
     }
 }

@@ -1,31 +1,45 @@
-//! Scenes: a JSON description (camera, light, material, background) plus a mesh. The built-in
-//! scenes are embedded in the binary so `fovea` runs from any directory.
+//! Scenes: a JSON description (camera, one directional light, materials, objects placing
+//! meshes), loaded and validated into one combined mesh with a material per vertex. The
+//! built-in scenes are embedded in the binary so `fovea` runs from any directory.
+//! Format: `docs/scenes.md`.
 
 mod camera;
+pub mod material;
 mod mesh;
+pub mod plan;
 mod ply;
 
 pub use camera::Camera;
+pub use material::{Material, MaterialSpec};
 pub use mesh::Mesh;
+pub use plan::Plan;
 pub use ply::{parse_ply, PlyError, PlyMesh};
 
-use glam::Vec3;
+use std::collections::BTreeMap;
+
+use glam::{Mat4, Quat, Vec3};
 use serde::{Deserialize, Serialize};
 
 /// The scene a session gets when `hello` names none.
-pub const DEFAULT_SCENE: &str = "bunny";
+pub const DEFAULT_SCENE: &str = "bunny-marble";
 
 /// Built-in scenes: (name, scene JSON).
-const BUILTIN_SCENES: &[(&str, &str)] = &[("bunny", include_str!("../../assets/scenes/bunny.json"))];
+const BUILTIN_SCENES: &[(&str, &str)] = &[
+    ("bunny-marble", include_str!("../../assets/scenes/bunny-marble.json")),
+    ("bunny-skin", include_str!("../../assets/scenes/bunny-skin.json")),
+    ("materials", include_str!("../../assets/scenes/materials.json")),
+    ("opaque", include_str!("../../assets/scenes/opaque.json")),
+    ("bunny", include_str!("../../assets/scenes/bunny.json")),
+];
 
-/// Meshes the scene files may refer to by file name.
+/// Meshes scene files may refer to by file name.
 const BUILTIN_MESHES: &[(&str, &[u8])] = &[("bunny.ply", include_bytes!("../../assets/meshes/bunny.ply"))];
 
 #[derive(Debug, thiserror::Error)]
 pub enum SceneError {
     #[error("unknown scene {0:?} (available: {available})", available = builtin_names().join(", "))]
     Unknown(String),
-    #[error("scene {scene:?} refers to mesh {mesh:?}, which is not built in")]
+    #[error("scene {scene:?} refers to mesh {mesh:?}, which is not built in (available: bunny.ply, plane)")]
     UnknownMesh { scene: String, mesh: String },
     #[error("scene file {scene:?} is invalid: {source}")]
     Json { scene: String, source: serde_json::Error },
@@ -43,44 +57,86 @@ pub struct Light {
     pub to_light: [f32; 3],
     /// Linear RGB colour of the light.
     pub color: [f32; 3],
-    /// Irradiance scale on a surface facing the light.
+    /// Irradiance on a surface facing the light (1 makes a white Lambertian surface white).
     pub intensity: f32,
+    /// Degrees per second the light circles the vertical axis; 0 for a static light.
+    #[serde(default)]
+    pub orbit_deg_per_s: f32,
 }
 
-/// A scene file as written on disk (see `docs/scenes.md`).
+impl Light {
+    /// Direction towards the light `t` seconds into a sequence.
+    pub fn to_light_at(&self, t: f64) -> Vec3 {
+        let base = Vec3::from(self.to_light);
+        if self.orbit_deg_per_s == 0.0 {
+            return base;
+        }
+        Quat::from_rotation_y((f64::from(self.orbit_deg_per_s) * t).to_radians() as f32) * base
+    }
+}
+
+/// A mesh placed in the scene: scaled, turned about the vertical axis, then moved.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ObjectSpec {
+    /// A built-in mesh: `bunny.ply`, or `plane` (a unit square in XZ facing +Y).
+    pub mesh: String,
+    /// A key of the scene's `materials`.
+    pub material: String,
+    #[serde(default)]
+    pub translate: [f32; 3],
+    #[serde(default = "one")]
+    pub scale: f32,
+    #[serde(default)]
+    pub rotate_y_deg: f32,
+}
+
+fn one() -> f32 {
+    1.0
+}
+
+fn ten() -> f64 {
+    10.0
+}
+
+/// A scene file as written on disk.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct SceneFile {
     pub name: String,
     #[serde(default)]
     pub description: String,
-    pub mesh: String,
-    /// Linear diffuse reflectance, each channel in [0, 1].
-    pub albedo: [f32; 3],
+    /// Millimetres per scene unit (subsurface scattering and depth of field are physical).
+    #[serde(default = "ten")]
+    pub mm_per_unit: f64,
     /// Constant ambient irradiance as a fraction of the light, so unlit sides are not black.
     pub ambient: f32,
     /// Background colour as it appears in the output image (sRGB bytes).
     pub background_srgb: [u8; 3],
     pub light: Light,
     pub camera: Camera,
-    /// Size of one scene unit in metres (depth of field works in metres). Default: centimetres.
-    #[serde(default = "centimetres")]
-    pub metres_per_unit: f32,
-}
-
-fn centimetres() -> f32 {
-    0.01
+    pub materials: BTreeMap<String, MaterialSpec>,
+    pub objects: Vec<ObjectSpec>,
 }
 
 /// A loaded, validated scene.
 #[derive(Debug, Clone)]
 pub struct Scene {
     pub file: SceneFile,
+    /// Every object's triangles in world space.
     pub mesh: Mesh,
+    /// Materials by id (the order of `file.materials`), with their names.
+    pub materials: Vec<(String, Material)>,
 }
 
 pub fn builtin_names() -> Vec<String> {
     BUILTIN_SCENES.iter().map(|(n, _)| (*n).to_string()).collect()
+}
+
+/// A unit square in XZ centred on the origin, facing +Y (two counter-clockwise triangles).
+fn plane() -> PlyMesh {
+    let positions = vec![Vec3::new(-0.5, 0.0, -0.5), Vec3::new(-0.5, 0.0, 0.5), Vec3::new(0.5, 0.0, 0.5), Vec3::new(0.5, 0.0, -0.5)];
+    PlyMesh { positions, indices: vec![0, 1, 2, 0, 2, 3] }
 }
 
 impl Scene {
@@ -93,22 +149,16 @@ impl Scene {
     }
 
     pub fn from_json(json: &str) -> Result<Scene, SceneError> {
-        let mut file: SceneFile = serde_json::from_str(json)
-            .map_err(|source| SceneError::Json { scene: "<json>".into(), source })?;
+        let mut file: SceneFile =
+            serde_json::from_str(json).map_err(|source| SceneError::Json { scene: "<json>".into(), source })?;
         let scene = file.name.clone();
         let invalid = |message: String| SceneError::Invalid { scene: scene.clone(), message };
-        let (_, bytes) = BUILTIN_MESHES
-            .iter()
-            .find(|(n, _)| *n == file.mesh)
-            .ok_or_else(|| SceneError::UnknownMesh { scene: scene.clone(), mesh: file.mesh.clone() })?;
-        let ply = parse_ply(bytes)
-            .map_err(|source| SceneError::Mesh { scene: scene.clone(), mesh: file.mesh.clone(), source })?;
         file.camera.validate().map_err(invalid)?;
-        if file.albedo.iter().any(|a| !(0.0..=1.0).contains(a)) {
-            return Err(invalid(format!("albedo {:?} must lie in [0, 1]", file.albedo)));
-        }
         if !(0.0..=1.0).contains(&file.ambient) {
             return Err(invalid(format!("ambient {} must lie in [0, 1]", file.ambient)));
+        }
+        if !(file.mm_per_unit.is_finite() && file.mm_per_unit > 0.0) {
+            return Err(invalid(format!("mm_per_unit {} must be finite and > 0", file.mm_per_unit)));
         }
         let to_light = Vec3::from(file.light.to_light)
             .try_normalize()
@@ -116,19 +166,62 @@ impl Scene {
         file.light.to_light = to_light.into();
         let light_ok = file.light.color.iter().all(|c| c.is_finite() && *c >= 0.0)
             && file.light.intensity.is_finite()
-            && file.light.intensity >= 0.0;
+            && file.light.intensity >= 0.0
+            && file.light.orbit_deg_per_s.is_finite();
         if !light_ok {
             return Err(invalid("light colour and intensity must be finite and ≥ 0".into()));
         }
-        if !(file.metres_per_unit.is_finite() && file.metres_per_unit > 0.0) {
-            return Err(invalid(format!("metres_per_unit {} must be finite and > 0", file.metres_per_unit)));
+        let mut materials = Vec::new();
+        for (name, spec) in &file.materials {
+            let m = Material::from_spec(spec).map_err(|e| invalid(format!("material {name:?}: {e}")))?;
+            materials.push((name.clone(), m));
         }
-        let mesh = Mesh::with_smooth_normals(ply.positions, ply.indices);
-        Ok(Scene { file, mesh })
+        if file.objects.is_empty() {
+            return Err(invalid("a scene needs at least one object".into()));
+        }
+        let mut mesh = Mesh::default();
+        for (i, object) in file.objects.iter().enumerate() {
+            let material = materials
+                .iter()
+                .position(|(n, _)| *n == object.material)
+                .ok_or_else(|| invalid(format!("object {i} uses material {:?}, which the scene does not define", object.material)))?;
+            let ply = match object.mesh.as_str() {
+                "plane" => plane(),
+                name => {
+                    let (_, bytes) = BUILTIN_MESHES
+                        .iter()
+                        .find(|(n, _)| *n == name)
+                        .ok_or_else(|| SceneError::UnknownMesh { scene: scene.clone(), mesh: name.to_string() })?;
+                    parse_ply(bytes).map_err(|source| SceneError::Mesh { scene: scene.clone(), mesh: name.to_string(), source })?
+                }
+            };
+            if !(object.scale.is_finite() && object.scale > 0.0) || !Vec3::from(object.translate).is_finite() || !object.rotate_y_deg.is_finite() {
+                return Err(invalid(format!("object {i}: scale must be > 0 and the transform finite")));
+            }
+            let transform = Mat4::from_scale_rotation_translation(
+                Vec3::splat(object.scale),
+                Quat::from_rotation_y(object.rotate_y_deg.to_radians()),
+                Vec3::from(object.translate),
+            );
+            let positions: Vec<Vec3> = ply.positions.iter().map(|p| transform.transform_point3(*p)).collect();
+            let part = Mesh::with_smooth_normals(positions, ply.indices);
+            // The cheap translucency rung shades with normals blurred over the light's reach.
+            let reach_units = (materials[material].1.reach_mm() / file.mm_per_unit) as f32;
+            mesh.append(part.with_blurred_normals(reach_units), material as u32);
+        }
+        Ok(Scene { file, mesh, materials })
     }
 
     pub fn name(&self) -> &str {
         &self.file.name
+    }
+
+    pub fn has_translucency(&self) -> bool {
+        self.materials.iter().any(|(_, m)| m.is_translucent())
+    }
+
+    pub fn metres_per_unit(&self) -> f64 {
+        self.file.mm_per_unit / 1000.0
     }
 }
 
@@ -139,24 +232,42 @@ mod tests {
     #[test]
     fn every_builtin_scene_loads() {
         for name in builtin_names() {
-            let s = Scene::builtin(&name).unwrap();
+            let s = Scene::builtin(&name).unwrap_or_else(|e| panic!("{name}: {e}"));
             assert!(s.mesh.triangle_count() > 0);
             assert!((Vec3::from(s.file.light.to_light).length() - 1.0).abs() < 1e-6);
+            assert_eq!(s.mesh.material.len(), s.mesh.positions.len());
         }
+        assert!(Scene::builtin(DEFAULT_SCENE).unwrap().has_translucency());
+        assert!(!Scene::builtin("opaque").unwrap().has_translucency());
     }
 
     #[test]
     fn unknown_scene_lists_the_available_ones() {
         let e = Scene::builtin("teapot").unwrap_err().to_string();
-        assert!(e.contains("teapot") && e.contains("bunny"), "{e}");
+        assert!(e.contains("teapot") && e.contains("bunny-marble"), "{e}");
     }
 
     #[test]
     fn bad_values_in_a_scene_file_are_rejected_with_the_reason() {
-        let good = include_str!("../../assets/scenes/bunny.json");
-        let bad = good.replace("\"ambient\": 0.06", "\"ambient\": 3.0");
-        assert_ne!(good, bad, "test must actually change the file");
-        let e = Scene::from_json(&bad).unwrap_err().to_string();
-        assert!(e.contains("ambient"), "{e}");
+        let good = include_str!("../../assets/scenes/bunny-marble.json");
+        for (from, to, expect) in [
+            ("\"ambient\": 0.02", "\"ambient\": 3.0", "ambient"),
+            ("\"preset\": \"marble\"", "\"preset\": \"jade\"", "jade"),
+            ("\"material\": \"marble\"", "\"material\": \"gold\"", "gold"),
+            ("\"mesh\": \"bunny.ply\"", "\"mesh\": \"teapot.obj\"", "teapot.obj"),
+        ] {
+            let bad = good.replace(from, to);
+            assert_ne!(good, bad, "test must actually change the file ({from})");
+            let e = Scene::from_json(&bad).unwrap_err().to_string();
+            assert!(e.contains(expect), "{e}");
+        }
+    }
+
+    #[test]
+    fn an_orbiting_light_turns_and_a_static_one_does_not() {
+        let mut l = Light { to_light: [1.0, 0.0, 0.0], color: [1.0; 3], intensity: 1.0, orbit_deg_per_s: 0.0 };
+        assert_eq!(l.to_light_at(10.0), Vec3::X);
+        l.orbit_deg_per_s = 90.0;
+        assert!((l.to_light_at(1.0) - Vec3::new(0.0, 0.0, -1.0)).length() < 1e-6);
     }
 }

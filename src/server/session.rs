@@ -243,6 +243,7 @@ impl Session {
         request.display = hello.display;
         request.settings = self.settings.clone();
         request.stream = stream;
+        request.time_s = self.hello_at.map(|t| t.elapsed().as_secs_f64()).unwrap_or(0.0);
         Some(FrameJob { frame: self.frames_made, gaze, arrived, request, hello: hello.clone() })
     }
 }

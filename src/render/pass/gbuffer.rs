@@ -1,5 +1,5 @@
-//! G-buffer pass: rasterises the mesh into normal + distance, albedo + coverage and last-frame
-//! screen position (for reprojection and motion), with depth testing.
+//! G-buffer pass: rasterises every object into normal + distance, albedo + material id, and
+//! the subsurface-blurred normal, with depth testing.
 
 use wgpu::util::DeviceExt;
 
@@ -12,21 +12,31 @@ pub const LABEL: &str = "gbuffer";
 
 pub const NORMAL_DISTANCE: wgpu::TextureFormat = wgpu::TextureFormat::Rgba32Float;
 pub const ALBEDO: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8Unorm;
-pub const PREVIOUS: wgpu::TextureFormat = wgpu::TextureFormat::Rg32Float;
+/// Stored as n·0.5 + 0.5 (signed normalised formats are not renderable in WebGPU).
+pub const BLURRED_NORMAL: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8Unorm;
 pub const DEPTH: wgpu::TextureFormat = wgpu::TextureFormat::Depth32Float;
 
 #[repr(C)]
 #[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
-struct Vertex {
+pub struct Vertex {
     position: [f32; 3],
     normal: [f32; 3],
+    blurred_normal: [f32; 3],
+    material: u32,
 }
+
+/// The vertex layout the G-buffer and photon passes share.
+pub const VERTEX_LAYOUT: wgpu::VertexBufferLayout<'static> = wgpu::VertexBufferLayout {
+    array_stride: std::mem::size_of::<Vertex>() as u64,
+    step_mode: wgpu::VertexStepMode::Vertex,
+    attributes: &wgpu::vertex_attr_array![0 => Float32x3, 1 => Float32x3, 2 => Float32x3, 3 => Uint32],
+};
 
 /// A scene's mesh on the GPU.
 pub struct MeshBuffers {
-    vertices: wgpu::Buffer,
-    indices: wgpu::Buffer,
-    index_count: u32,
+    pub vertices: wgpu::Buffer,
+    pub indices: wgpu::Buffer,
+    pub index_count: u32,
 }
 
 pub struct GBufferPass {
@@ -38,14 +48,14 @@ pub struct GBufferPass {
 pub struct GBufferTargets<'a> {
     pub normal_distance: &'a wgpu::TextureView,
     pub albedo: &'a wgpu::TextureView,
-    pub previous: &'a wgpu::TextureView,
+    pub blurred_normal: &'a wgpu::TextureView,
     pub depth: &'a wgpu::TextureView,
 }
 
 impl GBufferPass {
     pub fn new(device: &wgpu::Device) -> GBufferPass {
         let module = gpu::shader(device, LABEL, SHADER);
-        let layout = gpu::layout(device, LABEL, &[gpu::uniform(0, false)]);
+        let layout = gpu::layout(device, LABEL, &[gpu::uniform(0, false), gpu::storage_buffer(1, true)]);
         let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
             label: Some(LABEL),
             bind_group_layouts: &[Some(&layout)],
@@ -59,11 +69,7 @@ impl GBufferPass {
                 module: &module,
                 entry_point: Some("vs_main"),
                 compilation_options: Default::default(),
-                buffers: &[Some(wgpu::VertexBufferLayout {
-                    array_stride: std::mem::size_of::<Vertex>() as u64,
-                    step_mode: wgpu::VertexStepMode::Vertex,
-                    attributes: &wgpu::vertex_attr_array![0 => Float32x3, 1 => Float32x3],
-                })],
+                buffers: &[Some(VERTEX_LAYOUT)],
             },
             primitive: wgpu::PrimitiveState { cull_mode: Some(wgpu::Face::Back), ..Default::default() },
             depth_stencil: Some(wgpu::DepthStencilState {
@@ -78,7 +84,7 @@ impl GBufferPass {
                 module: &module,
                 entry_point: Some("fs_main"),
                 compilation_options: Default::default(),
-                targets: &[target(NORMAL_DISTANCE), target(ALBEDO), target(PREVIOUS)],
+                targets: &[target(NORMAL_DISTANCE), target(ALBEDO), target(BLURRED_NORMAL)],
             }),
             multiview_mask: None,
             cache: None,
@@ -88,11 +94,13 @@ impl GBufferPass {
 
     pub fn upload(&self, device: &wgpu::Device, scene: &Scene) -> MeshBuffers {
         let mesh = &scene.mesh;
-        let vertices: Vec<Vertex> = mesh
-            .positions
-            .iter()
-            .zip(&mesh.normals)
-            .map(|(p, n)| Vertex { position: p.to_array(), normal: n.to_array() })
+        let vertices: Vec<Vertex> = (0..mesh.positions.len())
+            .map(|i| Vertex {
+                position: mesh.positions[i].to_array(),
+                normal: mesh.normals[i].to_array(),
+                blurred_normal: mesh.blurred_normals[i].to_array(),
+                material: mesh.material[i],
+            })
             .collect();
         let label = Some(scene.name());
         let vertices = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
@@ -130,7 +138,7 @@ impl GBufferPass {
                 // Distance −1 marks "no surface": it can never pass the reprojection test.
                 clear(targets.normal_distance, wgpu::Color { r: 0.0, g: 0.0, b: 0.0, a: -1.0 }),
                 clear(targets.albedo, wgpu::Color::TRANSPARENT),
-                clear(targets.previous, wgpu::Color { r: -1e9, g: -1e9, b: 0.0, a: 0.0 }),
+                clear(targets.blurred_normal, wgpu::Color::TRANSPARENT),
             ],
             depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
                 view: targets.depth,

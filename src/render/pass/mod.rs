@@ -1,13 +1,16 @@
 //! One file per pass, each beside its WGSL in `shaders/`, in frame order:
-//! gbuffer → sampling → compact → shade → jfa → resolve → dof → output (with the gaze marker).
+//! (photons → pyramid, once per static scene) → gbuffer → (screen_diffusion) → sampling →
+//! compact → shade → jfa → resolve → dof → output (with the gaze marker).
 
 pub mod compact;
 pub mod dof;
 pub mod gbuffer;
 pub mod jfa;
 pub mod output;
+pub mod photons;
 pub mod resolve;
 pub mod sampling;
+pub mod screen_diffusion;
 pub mod shade;
 
 /// Every shader the renderer ships, by file name, as compiled (with the shared prelude where
@@ -23,6 +26,9 @@ pub fn shaders() -> Vec<(&'static str, String)> {
         ("resolve.wgsl", compose(resolve::SHADER)),
         ("dof.wgsl", compose(dof::SHADER)),
         ("output.wgsl", compose(output::SHADER)),
+        ("photons.wgsl", compose(photons::PHOTON_SHADER)),
+        ("pyramid.wgsl", compose(photons::PYRAMID_SHADER)),
+        ("screen_diffusion.wgsl", compose(screen_diffusion::SHADER)),
         ("common.wgsl", crate::render::gpu::COMMON.to_string()),
     ]
 }

@@ -15,7 +15,7 @@ pub fn new(device: &wgpu::Device) -> FramePass {
             gpu::uniform(0, false),
             gpu::texture(1, FLOAT),
             gpu::texture(2, FLOAT),
-            gpu::texture(3, FLOAT),
+            gpu::storage_buffer(3, true),
             gpu::texture(4, FLOAT),
             gpu::storage_buffer(5, true),
             gpu::texture(6, FLOAT),

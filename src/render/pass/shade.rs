@@ -27,6 +27,10 @@ impl ShadePass {
                 gpu::storage_buffer(4, true),
                 gpu::storage_buffer(5, true),
                 gpu::storage_buffer(6, false),
+                gpu::storage_buffer(7, true),
+                gpu::texture(8, FLOAT),
+                gpu::storage_buffer(9, true),
+                gpu::storage_buffer(10, true),
             ],
         );
         let list = gpu::compute_pipeline(device, "shade.list", &module, "shade_list", &layout);

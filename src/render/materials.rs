@@ -1,0 +1,74 @@
+//! Materials on the GPU: the Rust twin of `struct Material` in `shaders/common.wgsl`.
+
+use bytemuck::{Pod, Zeroable};
+use wgpu::util::DeviceExt;
+
+use crate::scene::{Material, Plan, Scene};
+
+#[repr(C)]
+#[derive(Clone, Copy, Pod, Zeroable, Debug, Default)]
+pub struct GpuMaterial {
+    pub kind: u32,
+    pub subsurface: u32,
+    pub eta: f32,
+    pub _pad: f32,
+    pub albedo: [f32; 4],
+    pub sigma_tr: [f32; 4],
+    pub z_r: [f32; 4],
+    pub z_v: [f32; 4],
+    pub alpha: [f32; 4],
+}
+
+/// The scene's materials; `subsurface` says which translucent ones get the subsurface rungs
+/// (all translucent ones when `plan` is `None`, as for the photon map).
+pub fn gpu_materials(scene: &Scene, plan: Option<&Plan>) -> Vec<GpuMaterial> {
+    scene
+        .materials
+        .iter()
+        .enumerate()
+        .map(|(id, (_, m))| {
+            let albedo = m.albedo();
+            let rgba = |v: [f64; 3]| [v[0] as f32, v[1] as f32, v[2] as f32, 0.0];
+            match m {
+                Material::Opaque { .. } => GpuMaterial { albedo: rgba(albedo), eta: 1.0, ..Default::default() },
+                Material::Translucent { eta, dipole, .. } => GpuMaterial {
+                    kind: 1,
+                    subsurface: plan.map(|p| p.subsurface(id)).unwrap_or(true) as u32,
+                    eta: *eta as f32,
+                    _pad: 0.0,
+                    albedo: rgba(albedo),
+                    sigma_tr: rgba(dipole.map(|d| d.sigma_tr)),
+                    z_r: rgba(dipole.map(|d| d.z_r)),
+                    z_v: rgba(dipole.map(|d| d.z_v)),
+                    alpha: rgba(dipole.map(|d| d.albedo)),
+                },
+            }
+        })
+        .collect()
+}
+
+pub fn upload(device: &wgpu::Device, label: &str, materials: &[GpuMaterial]) -> wgpu::Buffer {
+    device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+        label: Some(label),
+        contents: bytemuck::cast_slice(materials),
+        usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
+    })
+}
+
+/// Each material's subsurface reach in mm, as vec4s (x used), for the screen-space rung.
+pub fn upload_reach(device: &wgpu::Device, scene: &Scene) -> wgpu::Buffer {
+    let reach: Vec<[f32; 4]> = scene.materials.iter().map(|(_, m)| [m.reach_mm() as f32, 0.0, 0.0, 0.0]).collect();
+    device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+        label: Some("materials.reach"),
+        contents: bytemuck::cast_slice(&reach),
+        usage: wgpu::BufferUsages::STORAGE,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    #[test]
+    fn gpu_material_matches_the_wgsl_struct_size() {
+        assert_eq!(std::mem::size_of::<super::GpuMaterial>(), 16 + 5 * 16);
+    }
+}

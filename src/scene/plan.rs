@@ -1,0 +1,173 @@
+//! The scene plan: from the scene file (and the frame size) alone, which passes a frame needs.
+//! Nothing translucent → no photon pass and no pyramid. Static light and geometry → the pyramid
+//! is built once. A translucent material whose light spreads less than a pixel at the distance
+//! it is seen from → its translucency is invisible, and the cheap opaque rung shades it.
+
+use std::fmt;
+
+use glam::Vec3;
+
+use super::{Material, Scene};
+
+/// When the light-space photon pyramid is (re)built.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Pyramid {
+    /// No translucent material needs the dipole.
+    NotNeeded,
+    /// Geometry and light are static: built once, reused by every frame and session.
+    Once,
+    /// The light moves: rebuilt every frame.
+    EveryFrame { orbit_deg_per_s: f32 },
+}
+
+#[derive(Debug, Clone, PartialEq)]
+pub struct MaterialPlan {
+    pub name: String,
+    pub translucent: bool,
+    /// Radius (mm) through which half the re-emitted light leaves (`Material::reach_mm`).
+    pub reach_mm: f64,
+    /// What one pixel covers (mm) on the nearest object using this material.
+    pub footprint_mm: f64,
+    /// Shade with the subsurface rungs (false: opaque BRDF, at the dipole's total reflectance).
+    pub subsurface: bool,
+}
+
+#[derive(Debug, Clone, PartialEq)]
+pub struct Plan {
+    pub scene: String,
+    pub width: u32,
+    pub height: u32,
+    pub materials: Vec<MaterialPlan>,
+    pub photon_pass: bool,
+    pub pyramid: Pyramid,
+    /// Radiosity is for enclosed scenes with diffuse interreflection; none of ours is enclosed.
+    pub radiosity: bool,
+}
+
+impl Plan {
+    pub fn of(scene: &Scene, width: u32, height: u32) -> Plan {
+        let cam = &scene.file.camera;
+        let eye = Vec3::from(cam.eye);
+        // Millimetres one pixel spans per unit of distance from the eye.
+        let mm_per_pixel_per_unit = 2.0 * (f64::from(cam.fov_y_deg).to_radians() / 2.0).tan() / f64::from(height.max(1)) * scene.file.mm_per_unit;
+        let materials: Vec<MaterialPlan> = scene
+            .materials
+            .iter()
+            .enumerate()
+            .map(|(id, (name, m))| {
+                // Nearest vertex of this material: the most detailed view of it.
+                let nearest = scene
+                    .mesh
+                    .positions
+                    .iter()
+                    .zip(&scene.mesh.material)
+                    .filter(|(_, mat)| **mat as usize == id)
+                    .map(|(p, _)| f64::from(p.distance(eye)))
+                    .fold(f64::INFINITY, f64::min)
+                    .max(f64::from(cam.near));
+                let footprint_mm = nearest * mm_per_pixel_per_unit;
+                let reach_mm = m.reach_mm();
+                MaterialPlan {
+                    name: name.clone(),
+                    translucent: m.is_translucent(),
+                    reach_mm,
+                    footprint_mm,
+                    subsurface: matches!(m, Material::Translucent { .. }) && reach_mm >= footprint_mm,
+                }
+            })
+            .collect();
+        let needs_dipole = materials.iter().any(|m| m.subsurface);
+        let orbit = scene.file.light.orbit_deg_per_s;
+        let pyramid = match (needs_dipole, orbit != 0.0) {
+            (false, _) => Pyramid::NotNeeded,
+            (true, false) => Pyramid::Once,
+            (true, true) => Pyramid::EveryFrame { orbit_deg_per_s: orbit },
+        };
+        Plan { scene: scene.name().to_string(), width, height, materials, photon_pass: needs_dipole, pyramid, radiosity: false }
+    }
+
+    /// Whether material `id` is shaded with the subsurface rungs.
+    pub fn subsurface(&self, id: usize) -> bool {
+        self.materials.get(id).is_some_and(|m| m.subsurface)
+    }
+}
+
+impl fmt::Display for Plan {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        writeln!(f, "scene plan for {:?} at {}x{}:", self.scene, self.width, self.height)?;
+        for m in &self.materials {
+            if !m.translucent {
+                writeln!(f, "  material {:?}: opaque BRDF", m.name)?;
+            } else if m.subsurface {
+                writeln!(
+                    f,
+                    "  material {:?}: subsurface scattering (light spreads {:.2} mm, a pixel covers {:.2} mm)",
+                    m.name, m.reach_mm, m.footprint_mm
+                )?;
+            } else {
+                writeln!(
+                    f,
+                    "  material {:?}: translucent, but light spreads {:.2} mm < one pixel ({:.2} mm): opaque BRDF at its total diffuse reflectance",
+                    m.name, m.reach_mm, m.footprint_mm
+                )?;
+            }
+        }
+        match self.pyramid {
+            Pyramid::NotNeeded => writeln!(f, "  light-space photon pass: off (nothing needs subsurface scattering)")?,
+            Pyramid::Once => writeln!(f, "  light-space photon pass + quad-tree pyramid: built once (static light and geometry)")?,
+            Pyramid::EveryFrame { orbit_deg_per_s } => {
+                writeln!(f, "  light-space photon pass + quad-tree pyramid: rebuilt every frame (light orbits {orbit_deg_per_s}°/s)")?
+            }
+        }
+        writeln!(f, "  radiosity: off (open scene: no enclosure for light to bounce around in)")
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn opaque_only_scenes_run_nothing_translucent() {
+        let p = Plan::of(&Scene::builtin("opaque").unwrap(), 640, 480);
+        assert!(!p.photon_pass && p.pyramid == Pyramid::NotNeeded && !p.radiosity);
+        assert!(p.materials.iter().all(|m| !m.subsurface));
+        assert!(p.to_string().contains("photon pass: off"));
+    }
+
+    #[test]
+    fn one_translucent_object_builds_the_pyramid_once() {
+        let p = Plan::of(&Scene::builtin("bunny-marble").unwrap(), 640, 480);
+        assert!(p.photon_pass && p.pyramid == Pyramid::Once);
+        assert!(p.subsurface(0), "{p}");
+    }
+
+    #[test]
+    fn mixed_scenes_plan_each_material() {
+        let p = Plan::of(&Scene::builtin("materials").unwrap(), 640, 480);
+        let get = |n: &str| p.materials.iter().find(|m| m.name == n).unwrap();
+        assert!(get("marble").subsurface && !get("plaster").subsurface && !get("plaster").translucent);
+        assert!(p.photon_pass);
+    }
+
+    #[test]
+    fn an_animated_light_rebuilds_every_frame() {
+        let json = include_str!("../../assets/scenes/bunny-marble.json").replace("\"intensity\": 2.5", "\"intensity\": 2.5, \"orbit_deg_per_s\": 30");
+        let p = Plan::of(&Scene::from_json(&json).unwrap(), 640, 480);
+        assert_eq!(p.pyramid, Pyramid::EveryFrame { orbit_deg_per_s: 30.0 });
+        assert!(p.to_string().contains("rebuilt every frame"));
+    }
+
+    #[test]
+    fn a_tiny_mean_free_path_at_a_coarse_resolution_needs_only_the_cheap_rung() {
+        // Half of skin's re-emitted light leaves within ~2 mm; seen on a 48-pixel-high frame a
+        // pixel covers ~5 mm, so its translucency is invisible there.
+        let p = Plan::of(&Scene::builtin("materials").unwrap(), 64, 48);
+        let skin = p.materials.iter().find(|m| m.name == "skin").unwrap();
+        assert!(skin.translucent && !skin.subsurface, "{p}");
+        assert!(p.to_string().contains("opaque BRDF at its total diffuse reflectance"));
+        // At full HD the same material needs its subsurface light.
+        let hd = Plan::of(&Scene::builtin("materials").unwrap(), 1920, 1080);
+        assert!(hd.materials.iter().find(|m| m.name == "skin").unwrap().subsurface, "{hd}");
+    }
+}
