@@ -52,8 +52,11 @@ enum Command {
         #[arg(long, value_parser = parse_vec3)]
         light: Option<Vec3>,
         /// Output file; .png (lossless) or .jpg/.jpeg.
+        #[arg(long, required_unless_present = "explain")]
+        out: Option<PathBuf>,
+        /// Print the scene plan (which passes run, and why) for this scene and size, and exit.
         #[arg(long)]
-        out: PathBuf,
+        explain: bool,
         /// JPEG quality 1–100.
         #[arg(long, default_value_t = 90, value_parser = clap::value_parser!(u8).range(1..=100))]
         quality: u8,
@@ -243,6 +246,7 @@ fn main() -> Result<()> {
             no_marker,
             light,
             out,
+            explain,
             quality,
             preset,
             frames,
@@ -251,6 +255,12 @@ fn main() -> Result<()> {
             distance_cm,
             knobs,
         } => {
+            if explain {
+                let scene = fovea::scene::Scene::builtin(&scene)?;
+                print!("{}", fovea::scene::Plan::of(&scene, width, height));
+                return Ok(());
+            }
+            let out = out.context("--out is required")?;
             let mut settings = fovea::foveation::Settings::preset(&preset)
                 .with_context(|| format!("unknown preset {preset:?}; available: {}", fovea::foveation::PRESETS.join(", ")))?;
             let patch = knobs.patch();

@@ -134,6 +134,14 @@ impl Dipole {
     }
 }
 
+/// The distance (mm) at which a photon's R_d is evaluated: a photon stands for the light
+/// entering a disc of `radius_mm` (its texel footprint), so its distance to a shading point is
+/// softened by that radius instead of letting R_d's 1/r³ peak through. CPU twin of
+/// `cluster_distance_mm` in `shaders/shade.wgsl`.
+pub fn softened_distance(r_mm: f64, radius_mm: f64) -> f64 {
+    (r_mm * r_mm + radius_mm * radius_mm).sqrt()
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

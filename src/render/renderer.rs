@@ -190,22 +190,35 @@ impl Renderer {
     /// Loads a scene onto the GPU ahead of its first frame (otherwise the first frame does it).
     pub fn load_scene(&mut self, name: &str) -> Result<&Scene, RenderError> {
         if !self.scenes.contains_key(name) {
-            let scene = Scene::builtin(name)?;
-            let d = &self.gpu.device;
-            let mesh = self.passes.gbuffer.upload(d, &scene);
-            let materials = super::materials::upload(d, "materials.scene", &super::materials::gpu_materials(&scene, None));
-            let reach = super::materials::upload_reach(d, &scene);
-            let photons = scene.has_translucency().then(|| self.passes.photons.create_map(d, &materials));
-            let no_photons = d.create_buffer(&wgpu::BufferDescriptor {
-                label: Some("pyramid.none"),
-                size: 32,
-                usage: wgpu::BufferUsages::STORAGE,
-                mapped_at_creation: false,
-            });
-            tracing::info!(scene = name, triangles = scene.mesh.triangle_count(), translucent = scene.has_translucency(), "scene loaded");
-            self.scenes.insert(name.to_string(), SceneGpu { scene, mesh, materials, reach, photons, no_photons });
+            self.insert_scene(Scene::builtin(name)?);
         }
         Ok(&self.scenes[name].scene)
+    }
+
+    /// Registers a scene that is not built in (a scene file from elsewhere, a test's own);
+    /// it replaces any scene of the same name.
+    pub fn add_scene(&mut self, scene: Scene) {
+        let name = scene.name().to_string();
+        self.scenes.remove(&name);
+        self.targets.retain(|(k, _)| k.1 != name);
+        self.insert_scene(scene);
+    }
+
+    fn insert_scene(&mut self, scene: Scene) {
+        let name = scene.name().to_string();
+        let d = &self.gpu.device;
+        let mesh = self.passes.gbuffer.upload(d, &scene);
+        let materials = super::materials::upload(d, "materials.scene", &super::materials::gpu_materials(&scene, None));
+        let reach = super::materials::upload_reach(d, &scene);
+        let photons = scene.has_translucency().then(|| self.passes.photons.create_map(d, &materials));
+        let no_photons = d.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("pyramid.none"),
+            size: 32,
+            usage: wgpu::BufferUsages::STORAGE,
+            mapped_at_creation: false,
+        });
+        tracing::info!(scene = %name, triangles = scene.mesh.triangle_count(), translucent = scene.has_translucency(), "scene loaded");
+        self.scenes.insert(name, SceneGpu { scene, mesh, materials, reach, photons, no_photons });
     }
 
     /// How many times a photon pyramid has been built (static scenes: once per scene).

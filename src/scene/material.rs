@@ -23,7 +23,7 @@ pub const JENSEN_2001: &[(&str, [f64; 3], [f64; 3])] = &[
 ];
 
 /// The share of re-emitted light that defines a material's reach (see `Material::reach_mm`).
-pub const REACH_FRACTION: f64 = 0.5;
+pub const REACH_FRACTION: f64 = 0.9;
 
 /// The index of refraction Jensen et al. measured with.
 pub const JENSEN_ETA: f64 = 1.3;
@@ -104,7 +104,7 @@ impl Material {
         }
     }
 
-    /// How far (mm) light spreads under the surface: the radius through which half of the light
+    /// How far (mm) light spreads under the surface: the radius through which 90% of the light
     /// that comes back out leaves, the largest over the channels; 0 for opaque materials.
     pub fn reach_mm(&self) -> f64 {
         match self {
