@@ -103,7 +103,7 @@ struct BenchArgs {
     /// Move the gaze slowly around each point (smooth pursuit), so temporal reuse is exercised.
     #[arg(long)]
     moving: bool,
-    /// Configurations: presets, knobs, or a comma-separated list of names from knobs.
+    /// Configurations: presets, rungs, knobs, or a comma-separated list of names from knobs.
     #[arg(long, default_value = "knobs")]
     sweep: String,
     /// Unmeasured frames per configuration and gaze before measuring.

@@ -2,7 +2,7 @@
 
 use serde::{Deserialize, Serialize};
 
-use crate::foveation::{Noise, Reconstruction, Settings};
+use crate::foveation::{Noise, Reconstruction, Rung, Settings};
 use crate::optics::acuity::ProbabilityForm;
 use crate::protocol::Codec;
 
@@ -20,7 +20,11 @@ impl BenchConfig {
     }
 
     fn variant(name: String, tweak: impl FnOnce(&mut Settings)) -> BenchConfig {
-        let mut c = BenchConfig::preset("balanced").expect("balanced is a preset");
+        BenchConfig::variant_of("balanced", name, tweak)
+    }
+
+    fn variant_of(preset: &str, name: String, tweak: impl FnOnce(&mut Settings)) -> BenchConfig {
+        let mut c = BenchConfig::preset(preset).expect("a preset");
         tweak(&mut c.settings);
         c.settings.preset = name.clone();
         c.name = name;
@@ -28,12 +32,25 @@ impl BenchConfig {
     }
 }
 
-/// `presets`: the named presets. `knobs`: presets plus single-knob variations of `balanced`
-/// (MAR slope, ξ, probability form, saliency, reprojection, reconstruction, noise, compaction)
-/// and the encoder. Any other value is a comma-separated list of names from `knobs`.
+/// `presets`: the named presets. `rungs`: every translucency rung and cut, unfoveated.
+/// `knobs`: presets, rungs, and single-knob variations of `balanced` (MAR slope, ξ,
+/// probability form, saliency, reprojection, reconstruction, noise, compaction) and the
+/// encoder. Any other value is a comma-separated list of names from `knobs`.
 pub fn sweep(which: &str) -> Result<Vec<BenchConfig>, String> {
     let presets: Vec<BenchConfig> = crate::foveation::PRESETS.iter().filter_map(|p| BenchConfig::preset(p)).collect();
+    let mut rungs = Vec::new();
+    for rung in [Rung::Opaque, Rung::NormalBlur, Rung::Screen] {
+        let name = serde_json::to_value(rung).ok().and_then(|v| v.as_str().map(str::to_string)).unwrap_or_default();
+        rungs.push(BenchConfig::variant_of("full", format!("full {name}"), |s| s.translucency.rung = rung));
+    }
+    for level in 1..=4u32 {
+        rungs.push(BenchConfig::variant_of("full", format!("full cut-level {level}"), |s| s.translucency.cut_level = level));
+    }
+    for eps in [0.25f32, 1.0, 2.0] {
+        rungs.push(BenchConfig::variant_of("full", format!("full cut-ε {eps}"), |s| s.translucency.cut_epsilon = eps));
+    }
     let mut knobs = presets.clone();
+    knobs.extend(rungs.iter().cloned());
     for m in [0.015f32, 0.034, 0.05] {
         knobs.push(BenchConfig::variant(format!("balanced m={m}"), |s| s.foveation.mar_slope = m));
     }
@@ -58,6 +75,7 @@ pub fn sweep(which: &str) -> Result<Vec<BenchConfig>, String> {
     knobs.push(png);
     match which {
         "presets" => Ok(presets),
+        "rungs" => Ok(presets.into_iter().filter(|c| c.name == "full" || c.name == "reference").chain(rungs).collect()),
         "knobs" => Ok(knobs),
         list => list
             .split(',')
