@@ -15,6 +15,7 @@ pub mod bench;
 pub mod client;
 pub mod encode;
 pub mod foveation;
+pub mod gaze;
 pub mod optics;
 pub mod protocol;
 pub mod quality;

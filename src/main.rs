@@ -28,6 +28,10 @@ enum Command {
         /// Address to listen on. Port 0 picks a free port.
         #[arg(long, default_value = "127.0.0.1:8080")]
         addr: SocketAddr,
+        /// Record every session's received gaze samples to DIR/session-<id>.csv (generic CSV,
+        /// replayable with `fovea replay`).
+        #[arg(long)]
+        record_dir: Option<PathBuf>,
     },
     /// Render one frame to an image file, without a server.
     ///
@@ -83,6 +87,123 @@ enum Command {
     ///
     /// Ctrl-C stops after the current frame and still writes what was measured.
     Bench(BenchArgs),
+    /// Stream a gaze recording to a server at its recorded timing and record every frame.
+    ///
+    /// Formats: EyeLink CSV (t_s, xpos, ypos, ps), Pupil Labs Core gaze_positions.csv, Pupil Labs
+    /// Neon gaze.csv, Tobii-style (device_time_stamp, gaze_point_x, gaze_point_y,
+    /// pupil_diameter), and generic CSV (t_ms, x, y, pupil_mm; see --time-col and friends).
+    /// Track loss, blinks and samples far off the frame are not sent: the server keeps the last
+    /// valid gaze. Writes DIR/frames.csv, DIR/summary.json and, with --save-frames, the images.
+    Replay(ReplayArgs),
+    /// Evaluate gaze prediction on a recording: angular error at several horizons, holding the
+    /// last sample vs predicting, for fixation and saccade samples.
+    Gaze(GazeArgs),
+}
+
+#[derive(clap::Args)]
+struct RecordingArgs {
+    /// The recording.
+    file: PathBuf,
+    /// Screen size WxH in pixels, for formats in pixels (EyeLink, Neon, generic --pixels).
+    #[arg(long)]
+    screen: Option<String>,
+    /// eyelink, pupil_core, pupil_neon, tobii or generic (default: from the header).
+    #[arg(long, value_parser = parse_enum::<fovea::gaze::formats::Format>)]
+    format: Option<fovea::gaze::formats::Format>,
+    /// EyeLink pupil areas are scaled so the recording's median pupil is this diameter, mm.
+    #[arg(long, default_value_t = 4.0)]
+    pupil_median_mm: f64,
+    /// Generic CSV: column names and time unit (s, ms, us, ns); --pixels for pixel coordinates.
+    #[arg(long, default_value = "t_ms")]
+    time_col: String,
+    #[arg(long, default_value = "x")]
+    x_col: String,
+    #[arg(long, default_value = "y")]
+    y_col: String,
+    #[arg(long, default_value = "pupil_mm")]
+    pupil_col: String,
+    #[arg(long, default_value = "ms")]
+    time_unit: String,
+    #[arg(long)]
+    pixels: bool,
+}
+
+impl RecordingArgs {
+    fn load(&self) -> Result<fovea::gaze::formats::Recording> {
+        let text = std::fs::read_to_string(&self.file).with_context(|| format!("reading {}", self.file.display()))?;
+        let screen = self.screen.as_deref().map(parse_size).transpose()?;
+        let opts = fovea::gaze::formats::ParseOptions {
+            format: self.format,
+            screen,
+            columns: fovea::gaze::formats::Columns {
+                time: self.time_col.clone(),
+                x: self.x_col.clone(),
+                y: self.y_col.clone(),
+                pupil: Some(self.pupil_col.clone()),
+                time_unit: self.time_unit.clone(),
+                pixels: self.pixels,
+            },
+            pupil_median_mm: self.pupil_median_mm,
+            ..Default::default()
+        };
+        let rec = fovea::gaze::formats::parse(&text, &opts).with_context(|| format!("parsing {}", self.file.display()))?;
+        let lost = rec.samples.iter().filter(|s| s.xy.is_none()).count();
+        let span = rec.samples.last().map(|s| s.t_ms / 1e3).unwrap_or(0.0);
+        eprintln!("{}: {:?}, {} samples over {span:.1} s, {lost} without gaze (track loss or blink)", self.file.display(), rec.format, rec.samples.len());
+        if let Some(rule) = &rec.pupil_rule {
+            eprintln!("pupil: {rule}");
+        }
+        Ok(rec)
+    }
+}
+
+#[derive(clap::Args)]
+struct ReplayArgs {
+    #[command(flatten)]
+    recording: RecordingArgs,
+    /// Server WebSocket URL.
+    #[arg(long, default_value = "ws://127.0.0.1:8080/ws")]
+    url: String,
+    /// Output directory for frames.csv and summary.json.
+    #[arg(long)]
+    out: PathBuf,
+    /// Playback speed factor (2 = twice as fast).
+    #[arg(long, default_value_t = 1.0)]
+    speed: f64,
+    /// Start this many seconds into the recording.
+    #[arg(long, default_value_t = 0.0)]
+    start_s: f64,
+    /// Play only this many seconds of it.
+    #[arg(long)]
+    duration_s: Option<f64>,
+    /// Play the selection this many times.
+    #[arg(long = "loop", default_value_t = 1)]
+    loops: u32,
+    #[arg(long, default_value = fovea::scene::DEFAULT_SCENE)]
+    scene: String,
+    #[arg(long, default_value = "balanced")]
+    preset: String,
+    #[arg(long, default_value_t = 640)]
+    width: u32,
+    #[arg(long, default_value_t = 480)]
+    height: u32,
+    /// Save every received frame as DIR/frames/NNNNNN.jpg.
+    #[arg(long)]
+    save_frames: bool,
+}
+
+#[derive(clap::Args)]
+struct GazeArgs {
+    #[command(flatten)]
+    recording: RecordingArgs,
+    /// Prediction horizons, ms.
+    #[arg(long, default_value = "10,20,30,50")]
+    horizons: String,
+    /// Physical width of the screen the recording was made on, cm, and the viewing distance.
+    #[arg(long, default_value_t = 53.0)]
+    display_width_cm: f64,
+    #[arg(long, default_value_t = 60.0)]
+    distance_cm: f64,
 }
 
 #[derive(clap::Args)]
@@ -200,6 +321,8 @@ impl Knobs {
             cut_epsilon: self.cut_epsilon,
             dof: self.dof,
             overlay: self.overlay,
+            prediction: None,
+            prediction_horizon_ms: None,
         }
     }
 }
@@ -236,8 +359,10 @@ fn main() -> Result<()> {
         .with_writer(std::io::stderr)
         .init();
     match Cli::parse().command {
-        Command::Serve { addr } => serve(addr),
+        Command::Serve { addr, record_dir } => serve(addr, fovea::server::ServerOptions { record_dir }),
         Command::Bench(args) => bench(args),
+        Command::Replay(args) => replay(args),
+        Command::Gaze(args) => gaze(args),
         Command::Render {
             scene,
             width,
@@ -349,7 +474,63 @@ fn bench(a: BenchArgs) -> Result<()> {
     Ok(())
 }
 
-fn serve(addr: SocketAddr) -> Result<()> {
+fn replay(a: ReplayArgs) -> Result<()> {
+    let rec = a.recording.load()?;
+    let url = url_is_allowed(&a.url)?;
+    let opts = fovea::client::replay::ReplayOptions {
+        url,
+        hello: fovea::protocol::Hello { scene: a.scene.clone(), preset: a.preset.clone(), width: a.width, height: a.height, ..Default::default() },
+        speed: a.speed,
+        start_ms: a.start_s * 1e3,
+        duration_ms: a.duration_s.map(|d| d * 1e3),
+        loops: a.loops,
+        keep_images: a.save_frames,
+    };
+    let runtime = tokio::runtime::Runtime::new()?;
+    let started = std::time::Instant::now();
+    let (frames, summary) = runtime.block_on(fovea::client::replay::replay(&rec.samples, &opts, |done, total| {
+        eprint!("\rsent {done}/{total} samples ({:.0}%), {:.1} s", 100.0 * done as f64 / total.max(1) as f64, started.elapsed().as_secs_f64());
+    }))?;
+    eprintln!();
+    std::fs::create_dir_all(&a.out).with_context(|| format!("creating {}", a.out.display()))?;
+    std::fs::write(a.out.join("frames.csv"), fovea::client::replay::frames_csv(&frames))?;
+    std::fs::write(a.out.join("summary.json"), serde_json::to_string_pretty(&summary)?)?;
+    if a.save_frames {
+        let dir = a.out.join("frames");
+        std::fs::create_dir_all(&dir)?;
+        for f in &frames {
+            if let Some(img) = &f.image {
+                std::fs::write(dir.join(format!("{:06}.jpg", f.frame)), img)?;
+            }
+        }
+    }
+    println!("{}", serde_json::to_string_pretty(&summary)?);
+    eprintln!("wrote {}/frames.csv and summary.json", a.out.display());
+    Ok(())
+}
+
+/// Replay and load generate traffic: only loopback targets are allowed.
+fn url_is_allowed(url: &str) -> Result<String> {
+    let rest = url.strip_prefix("ws://").with_context(|| format!("{url:?}: expected ws://HOST:PORT/ws"))?;
+    let host = rest.split(['/', ':']).next().unwrap_or("");
+    let loopback = host == "localhost" || host == "[::1]" || host.parse::<std::net::Ipv4Addr>().is_ok_and(|ip| ip.is_loopback());
+    if !loopback {
+        bail!("{url:?}: only loopback servers (127.0.0.0/8, localhost, [::1]) may be targeted");
+    }
+    Ok(url.to_string())
+}
+
+fn gaze(a: GazeArgs) -> Result<()> {
+    let rec = a.recording.load()?;
+    let (w, h) = a.recording.screen.as_deref().map(parse_size).transpose()?.unwrap_or((1920, 1080));
+    let viewing = fovea::optics::acuity::Viewing { width: w, height: h, width_cm: a.display_width_cm, distance_cm: a.distance_cm };
+    let horizons: Vec<f64> = a.horizons.split(',').map(|s| s.trim().parse::<f64>()).collect::<Result<_, _>>().context("--horizons: numbers in ms")?;
+    let rows = fovea::gaze::evaluate::evaluate(&rec.samples, &viewing, &horizons);
+    println!("{}", fovea::gaze::evaluate::markdown(&rows));
+    Ok(())
+}
+
+fn serve(addr: SocketAddr, options: fovea::server::ServerOptions) -> Result<()> {
     let mut renderer = Renderer::new().context("opening the GPU")?;
     renderer.load_scene(fovea::scene::DEFAULT_SCENE).context("loading the default scene")?;
     let (render, render_thread) = RenderThread::spawn(renderer).context("starting the render thread")?;
@@ -360,7 +541,7 @@ fn serve(addr: SocketAddr) -> Result<()> {
         println!("fovea listening on http://{local}/");
         let shutdown = CancellationToken::new();
         tokio::spawn(stop_on_signal(shutdown.clone()));
-        fovea::server::run(listener, render, shutdown).await.context("serving")?;
+        fovea::server::run_with(listener, render, shutdown, options).await.context("serving")?;
         tracing::info!("server stopped");
         anyhow::Ok(())
     })?;

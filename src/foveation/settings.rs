@@ -149,6 +149,10 @@ pub struct Settings {
     /// Blur the frame by the eye's depth of field for the current pupil and gaze depth.
     pub dof: bool,
     pub overlay: Overlay,
+    /// Gaze prediction (a session knob; the renderer ignores it).
+    pub prediction: bool,
+    /// Prediction horizon in ms; 0 uses the session's measured gaze-to-frame latency.
+    pub prediction_horizon_ms: f32,
 }
 
 /// Named presets, cheapest last. `full` shades every pixel with the frame's shading; `reference`
@@ -180,7 +184,15 @@ impl Settings {
             "fast" => Translucency { cut_level: 1, cut_epsilon: 1.0, ..Translucency::DEFAULT },
             _ => Translucency::DEFAULT,
         };
-        Some(Settings { preset: name.to_string(), foveation, translucency, dof: false, overlay: Overlay::None })
+        Some(Settings {
+            preset: name.to_string(),
+            foveation,
+            translucency,
+            dof: false,
+            overlay: Overlay::None,
+            prediction: false,
+            prediction_horizon_ms: 0.0,
+        })
     }
 }
 
@@ -189,7 +201,11 @@ impl Settings {
     /// Returns the preset name back as an error if it does not exist.
     pub fn apply(&mut self, patch: &crate::protocol::SettingsPatch) -> Result<(), String> {
         if let Some(name) = &patch.preset {
+            let (prediction, horizon) = (self.prediction, self.prediction_horizon_ms);
             *self = Settings::preset(name).ok_or_else(|| name.clone())?;
+            // Prediction is about the viewer's eye, not image quality: presets keep it.
+            self.prediction = prediction;
+            self.prediction_horizon_ms = horizon;
         }
         let before = (self.foveation, self.translucency);
         let t = &mut self.translucency;
@@ -247,6 +263,12 @@ impl Settings {
         }
         if let Some(v) = patch.overlay {
             self.overlay = v;
+        }
+        if let Some(v) = patch.prediction {
+            self.prediction = v;
+        }
+        if let Some(v) = patch.prediction_horizon_ms {
+            self.prediction_horizon_ms = v as f32;
         }
         // Hand-tuned knobs make this a custom point near the named preset: say so.
         if (self.foveation, self.translucency) != before && !self.preset.ends_with('*') {

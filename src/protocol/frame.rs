@@ -32,11 +32,17 @@ pub struct FrameHeader {
     /// That sample's own `t_ms` (client clock), echoed for gaze-to-display latency.
     pub t_ms: Option<f64>,
     pub gaze: GazeUsed,
+    /// The sample's own position when prediction moved the gaze used.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub raw_gaze: Option<GazeUsed>,
     pub width: u32,
     pub height: u32,
     pub codec: Codec,
     /// Fraction of pixels shaded this frame (1.0 without foveation).
     pub sampled: f64,
+    /// Gaze samples the session had received when this frame was made (lost = sent − this).
+    #[serde(default)]
+    pub samples: u64,
     pub stages_ms: StageTimes,
     /// GPU milliseconds per render pass, where the adapter has timestamp queries.
     #[serde(default, skip_serializing_if = "std::collections::BTreeMap::is_empty")]
@@ -86,10 +92,12 @@ mod tests {
             seq: Some(17),
             t_ms: Some(12399.1),
             gaze: GazeUsed { x: 0.25, y: 0.75 },
+            raw_gaze: Some(GazeUsed { x: 0.2, y: 0.75 }),
             width: 64,
             height: 48,
             codec: Codec::Png,
             sampled: 1.0,
+            samples: 17,
             stages_ms: StageTimes { queue: 0.1, render: 2.0, readback: 0.5, encode: 1.25 },
             passes_ms: [("shade".to_string(), 0.75)].into_iter().collect(),
         };

@@ -159,6 +159,12 @@ pub struct SettingsPatch {
     pub dof: Option<bool>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub overlay: Option<crate::foveation::settings::Overlay>,
+    /// Predict the gaze at the expected display time.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub prediction: Option<bool>,
+    /// How far ahead to predict, ms; 0: the session's measured gaze-to-frame latency.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub prediction_horizon_ms: Option<f64>,
 }
 
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]

@@ -158,6 +158,9 @@ fn validate_settings(p: &SettingsPatch) -> Result<(), ProtocolError> {
     if let Some(v) = p.cut_epsilon {
         in_range("cut_epsilon", v, 0.0, 10.0)?;
     }
+    if let Some(v) = p.prediction_horizon_ms {
+        in_range("prediction_horizon_ms", v, 0.0, 500.0)?;
+    }
     if let Some(v) = p.sibson_window {
         in_range("sibson_window", f64::from(v), 0.0, 32.0)?;
     }

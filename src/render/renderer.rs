@@ -283,8 +283,10 @@ impl Renderer {
         if fov.enabled {
             encoder.clear_buffer(&t.counter, 0, None);
             p.sampling.encode(&mut encoder, &t.bind.sampling, size, timer);
+            // The list also counts the samples (the header's `sampled`), so it is built either way;
+            // without compaction the shading pass masks a full-frame dispatch instead of using it.
+            p.compact.encode(&mut encoder, &t.bind.compact, size, timer);
             if fov.compaction {
-                p.compact.encode(&mut encoder, &t.bind.compact, size, timer);
                 p.shade.encode_list(&mut encoder, &t.bind.shade, &t.counter, timer);
             } else {
                 p.shade.encode_grid(&mut encoder, &t.bind.shade, size, timer);

@@ -4,6 +4,7 @@
 
 mod app;
 mod assets;
+mod recorder;
 mod session;
 
 use std::sync::atomic::AtomicU64;
@@ -40,10 +41,26 @@ pub struct ServerState {
     pub shutdown: CancellationToken,
     /// Counts live sessions so shutdown can wait for their close frames.
     pub sessions: TaskTracker,
+    /// Where sessions' received gaze samples are recorded, if anywhere (opt-in).
+    pub record_dir: Option<std::path::PathBuf>,
+}
+
+/// How a server runs beyond its listener and renderer.
+#[derive(Debug, Clone, Default)]
+pub struct ServerOptions {
+    /// Record every session's received gaze samples to `session-<id>.csv` here.
+    pub record_dir: Option<std::path::PathBuf>,
 }
 
 /// Serves until `shutdown` is cancelled, then closes every session with 1001 and returns.
 pub async fn run(listener: TcpListener, render: RenderHandle, shutdown: CancellationToken) -> std::io::Result<()> {
+    run_with(listener, render, shutdown, ServerOptions::default()).await
+}
+
+pub async fn run_with(listener: TcpListener, render: RenderHandle, shutdown: CancellationToken, options: ServerOptions) -> std::io::Result<()> {
+    if let Some(dir) = &options.record_dir {
+        std::fs::create_dir_all(dir)?;
+    }
     let scenes = crate::scene::builtin_names()
         .into_iter()
         .filter_map(|name| match crate::scene::Scene::builtin(&name) {
@@ -61,6 +78,7 @@ pub async fn run(listener: TcpListener, render: RenderHandle, shutdown: Cancella
         next_session: AtomicU64::new(1),
         shutdown: shutdown.clone(),
         sessions: TaskTracker::new(),
+        record_dir: options.record_dir,
     });
     let app = router(state.clone());
     // Frames and gaze samples are small and latency-bound: Nagle's algorithm would hold them

@@ -17,6 +17,8 @@ use futures_util::{SinkExt, StreamExt};
 use super::ServerState;
 use crate::encode;
 use crate::foveation::{Settings, PRESETS};
+use crate::gaze::prediction::Predictor;
+use super::recorder::Recorder;
 use crate::protocol::{
     encode_frame, parse_client_message, ClientMessage, ErrorCode, FrameHeader, Gaze, GazeUsed,
     Hello, ProtocolError, ServerMessage, StageTimes, Welcome, PROTOCOL_VERSION,
@@ -27,13 +29,17 @@ use crate::render::FrameRequest;
 struct FrameJob {
     frame: u64,
     gaze: Option<Gaze>,
+    /// The sample's own position when prediction moved the gaze.
+    raw: Option<[f32; 2]>,
+    samples: u64,
     /// When the gaze sample (or the hello, for the first frame) arrived.
     arrived: Instant,
     request: FrameRequest,
     hello: Hello,
 }
 
-type Making = Pin<Box<dyn Future<Output = Result<Vec<u8>, ProtocolError>> + Send>>;
+/// The frame's bytes and when its gaze sample arrived.
+type Making = Pin<Box<dyn Future<Output = Result<(Vec<u8>, Instant), ProtocolError>> + Send>>;
 
 #[derive(Default)]
 struct Session {
@@ -53,12 +59,22 @@ struct Session {
     unacked: BTreeSet<u64>,
     samples: u64,
     coalesced: u64,
+    predictor: Option<Predictor>,
+    /// Gaze-to-frame-sent latency, smoothed: the prediction horizon when none is set.
+    latency_ms: Option<f64>,
+    recorder: Option<Recorder>,
 }
 
 pub async fn run(socket: WebSocket, state: Arc<ServerState>, id: u64) {
     tracing::info!(session = id, "session opened");
     let (mut tx, mut rx) = socket.split();
     let mut s = Session::default();
+    if let Some(dir) = &state.record_dir {
+        match Recorder::create(dir, id) {
+            Ok(r) => s.recorder = Some(r),
+            Err(e) => tracing::warn!(session = id, "cannot record gaze to {}: {e}", dir.display()),
+        }
+    }
     let mut making: Option<Making> = None;
     let mut sent = 0u64;
     let close = loop {
@@ -93,9 +109,11 @@ pub async fn run(socket: WebSocket, state: Arc<ServerState>, id: u64) {
             made = async { making.as_mut().expect("guarded by the select condition").await }, if making.is_some() => {
                 making = None;
                 match made {
-                    Ok(bytes) => {
+                    Ok((bytes, arrived)) => {
                         sent += 1;
                         replies.push(Message::Binary(bytes.into()));
+                        let ms = arrived.elapsed().as_secs_f64() * 1e3;
+                        s.latency_ms = Some(s.latency_ms.map_or(ms, |l| 0.8 * l + 0.2 * ms));
                     }
                     Err(e) => {
                         // The frame is gone: give its credit back so the session does not stall.
@@ -111,6 +129,7 @@ pub async fn run(socket: WebSocket, state: Arc<ServerState>, id: u64) {
         for reply in replies {
             if tx.send(reply).await.is_err() {
                 tracing::debug!(session = id, "client went away while we were sending");
+                s.finish_recording(id);
                 state.render.release(id);
                 return;
             }
@@ -119,6 +138,7 @@ pub async fn run(socket: WebSocket, state: Arc<ServerState>, id: u64) {
     if let Some(frame) = close {
         let _ = tx.send(Message::Close(Some(frame))).await;
     }
+    s.finish_recording(id);
     state.render.release(id);
     tracing::info!(
         session = id,
@@ -152,6 +172,12 @@ impl Session {
                 self.latest = Some((gaze, Instant::now()));
                 if gaze.pupil_mm.is_some() {
                     self.pupil_mm = gaze.pupil_mm;
+                }
+                if let Some(p) = self.predictor.as_mut() {
+                    p.push(gaze.t_ms, [gaze.x, gaze.y]);
+                }
+                if let Some(r) = self.recorder.as_mut() {
+                    r.write(&gaze);
                 }
                 self.dirty = true;
                 None
@@ -215,6 +241,12 @@ impl Session {
             limits: state.limits.clone(),
             adapter: state.render.adapter().to_string(),
         };
+        let d = hello.display;
+        let frame_deg = [
+            2.0 * (0.5 * d.width_cm / d.distance_cm).atan().to_degrees(),
+            2.0 * (0.5 * d.width_cm * f64::from(hello.height) / f64::from(hello.width) / d.distance_cm).atan().to_degrees(),
+        ];
+        self.predictor = Some(Predictor::new(frame_deg));
         self.hello = Some(hello);
         self.settings = settings;
         self.hello_at = Some(Instant::now());
@@ -237,14 +269,38 @@ impl Session {
         self.frames_made += 1;
         self.unacked.insert(self.frames_made);
         let mut request = FrameRequest::new(&hello.scene, hello.width, hello.height);
-        request.gaze = gaze.map(|g| [g.x as f32, g.y as f32]).unwrap_or([0.5, 0.5]);
+        let raw = gaze.map(|g| [g.x as f32, g.y as f32]).unwrap_or([0.5, 0.5]);
+        request.gaze = raw;
+        let mut predicted = false;
+        if self.settings.prediction && gaze.is_some() {
+            let horizon = match self.settings.prediction_horizon_ms {
+                h if h > 0.0 => f64::from(h),
+                _ => self.latency_ms.unwrap_or(0.0),
+            };
+            if let Some([x, y]) = self.predictor.as_ref().and_then(|p| p.predict(horizon)) {
+                // The frame is drawn for where the eye will be, within the frame.
+                request.gaze = [x.clamp(0.0, 1.0) as f32, y.clamp(0.0, 1.0) as f32];
+                predicted = request.gaze != raw;
+            }
+        }
         request.marker = true;
         request.pupil_mm = self.pupil_mm.map(|p| p as f32).unwrap_or(crate::render::DEFAULT_PUPIL_MM);
         request.display = hello.display;
         request.settings = self.settings.clone();
         request.stream = stream;
         request.time_s = self.hello_at.map(|t| t.elapsed().as_secs_f64()).unwrap_or(0.0);
-        Some(FrameJob { frame: self.frames_made, gaze, arrived, request, hello: hello.clone() })
+        Some(FrameJob { frame: self.frames_made, gaze, raw: predicted.then_some(raw), samples: self.samples, arrived, request, hello: hello.clone() })
+    }
+}
+
+impl Session {
+    fn finish_recording(&mut self, id: u64) {
+        if let Some(r) = self.recorder.take() {
+            match r.finish() {
+                Ok(path) => tracing::info!(session = id, "gaze recorded to {}", path.display()),
+                Err(e) => tracing::warn!(session = id, "gaze recording failed: {e}"),
+            }
+        }
     }
 }
 
@@ -257,7 +313,7 @@ fn no_hello(what: &str) -> ServerMessage {
 }
 
 /// Renders on the render thread, encodes on the blocking pool, and packs the binary message.
-async fn make_frame(state: Arc<ServerState>, job: FrameJob) -> Result<Vec<u8>, ProtocolError> {
+async fn make_frame(state: Arc<ServerState>, job: FrameJob) -> Result<(Vec<u8>, Instant), ProtocolError> {
     let failed = |what: &str, e: &dyn std::fmt::Display| {
         ProtocolError::new(ErrorCode::RenderFailed, format!("frame {}: {what}: {e}", job.frame))
     };
@@ -283,10 +339,12 @@ async fn make_frame(state: Arc<ServerState>, job: FrameJob) -> Result<Vec<u8>, P
         seq: job.gaze.map(|g| g.seq),
         t_ms: job.gaze.map(|g| g.t_ms),
         gaze: GazeUsed { x: f64::from(x), y: f64::from(y) },
+        raw_gaze: job.raw.map(|[x, y]| GazeUsed { x: f64::from(x), y: f64::from(y) }),
         width: w,
         height: h,
         codec,
         sampled,
+        samples: job.samples,
         stages_ms: StageTimes {
             queue,
             render: render_ms,
@@ -295,5 +353,5 @@ async fn make_frame(state: Arc<ServerState>, job: FrameJob) -> Result<Vec<u8>, P
         },
         passes_ms,
     };
-    Ok(encode_frame(&header, &image))
+    Ok((encode_frame(&header, &image), job.arrived))
 }

@@ -1,0 +1,83 @@
+//! Gaze end to end: a real recording replayed through a real server, and a session recorded by
+//! the server replayed to the same frames.
+
+use std::time::Duration;
+
+use fovea::client::replay::{replay, ReplayOptions};
+use fovea::gaze::formats::{parse, ParseOptions};
+use fovea::protocol::Hello;
+use fovea::render::{RenderThread, Renderer};
+use tokio_util::sync::CancellationToken;
+
+async fn server(record: Option<std::path::PathBuf>) -> (String, CancellationToken) {
+    let renderer = Renderer::new().unwrap_or_else(|e| panic!("GPU tests need an adapter: {e}"));
+    let (render, _) = RenderThread::spawn(renderer).unwrap();
+    let listener = tokio::net::TcpListener::bind("127.0.0.1:0").await.unwrap();
+    let url = format!("ws://{}/ws", listener.local_addr().unwrap());
+    let shutdown = CancellationToken::new();
+    tokio::spawn(fovea::server::run_with(listener, render, shutdown.clone(), fovea::server::ServerOptions { record_dir: record }));
+    (url, shutdown)
+}
+
+fn options(url: &str) -> ReplayOptions {
+    ReplayOptions {
+        url: url.to_string(),
+        // The opaque scene keeps frames cheap on the software adapter.
+        hello: Hello { scene: "bunny".into(), width: 96, height: 64, preset: "fast".into(), ..Hello::default() },
+        speed: 1.0,
+        start_ms: 0.0,
+        duration_ms: None,
+        loops: 1,
+        keep_images: false,
+    }
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn a_real_recording_replays_with_nothing_lost_and_much_coalesced() {
+    let text = include_str!("../assets/gaze/eyelink_1000hz_1920x1080.csv");
+    let rec = parse(text, &ParseOptions { screen: Some((1920, 1080)), ..Default::default() }).unwrap();
+    let (url, shutdown) = server(None).await;
+    // 1.5 s of the 1000 Hz recording around a blink (blink at 11.298 s).
+    let opts = ReplayOptions { start_ms: 10_500.0, duration_ms: Some(1_500.0), ..options(&url) };
+    let (frames, summary) = replay(&rec.samples, &opts, |_, _| {}).await.unwrap();
+    assert_eq!(summary.samples_in_selection, 1500);
+    assert!(summary.samples_unsendable > 0, "the blink's samples are not sent");
+    assert_eq!(summary.samples_lost, 0, "{summary:?}");
+    assert!(summary.samples_coalesced > summary.frames as u64, "1000 Hz samples outrun the frames: {summary:?}");
+    assert!(frames.len() >= 10, "{} frames", frames.len());
+    assert!(frames.iter().all(|f| f.latency_ms.is_none_or(|l| l > 0.0)));
+    // Frames answer samples in order.
+    let seqs: Vec<u64> = frames.iter().filter_map(|f| f.seq).collect();
+    assert!(seqs.windows(2).all(|w| w[0] < w[1]));
+    shutdown.cancel();
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn a_recorded_session_replays_to_the_same_frames() {
+    let dir = std::env::temp_dir().join(format!("fovea-record-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    let (url, shutdown) = server(Some(dir.clone())).await;
+    let synthetic = fovea::gaze::synthetic::generate(5, &fovea::optics::acuity::Viewing { width: 96, height: 64, width_cm: 53.0, distance_cm: 60.0 }, 60.0, 1000.0);
+    let slow = ReplayOptions { speed: 0.5, ..options(&url) };
+    let (first, _) = replay(&synthetic, &slow, |_, _| {}).await.unwrap();
+    // The session ended with the replay; its recording lands once the server notices.
+    let path = dir.join("session-1.csv");
+    for _ in 0..50 {
+        if path.exists() {
+            break;
+        }
+        tokio::time::sleep(Duration::from_millis(100)).await;
+    }
+    let text = std::fs::read_to_string(&path).expect("the session was recorded");
+    let recorded = parse(&text, &ParseOptions::default()).unwrap();
+    let sent: Vec<[f64; 2]> = synthetic.iter().filter_map(fovea::gaze::sendable).collect();
+    let got: Vec<[f64; 2]> = recorded.samples.iter().filter_map(|s| s.xy).collect();
+    assert_eq!(got, sent, "every sent sample was recorded, exactly");
+    let (second, _) = replay(&recorded.samples, &slow, |_, _| {}).await.unwrap();
+    let gazes = |f: &[fovea::client::replay::FrameRecord]| -> Vec<(f64, f64)> { f.iter().filter(|f| f.seq.is_some()).map(|f| (f.gaze_x, f.gaze_y)).collect() };
+    let (a, b) = (gazes(&first), gazes(&second));
+    // At half speed every sample gets its own frame, so both runs show the same gazes.
+    assert!(a.len() > 20 && a == b, "{} vs {} frames", a.len(), b.len());
+    shutdown.cancel();
+    let _ = std::fs::remove_dir_all(&dir);
+}
