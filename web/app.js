@@ -2,6 +2,7 @@
 // Protocol v1: JSON text both ways; frames are binary [u32 LE header length][JSON header][image].
 
 import { Stats, overlayText } from './overlay.js';
+import { SyntheticEye } from './synthetic-eye.js';
 
 const canvas = document.getElementById('view');
 const ctx = canvas.getContext('2d');
@@ -14,6 +15,8 @@ const presetSel = document.getElementById('preset');
 const overlaySel = document.getElementById('overlay-mode');
 const dofBox = document.getElementById('dof');
 const pupilRange = document.getElementById('pupil');
+const autoBox = document.getElementById('auto-gaze');
+const predictBox = document.getElementById('predict');
 
 // Exposed for people poking in the console and for the browser test.
 const state = {
@@ -136,7 +139,7 @@ function draw() {
 
 // Knobs that change live, without reconnecting.
 function sendSettings() {
-  send({ type: 'settings', preset: presetSel.value, overlay: overlaySel.value, dof: dofBox.checked });
+  send({ type: 'settings', preset: presetSel.value, overlay: overlaySel.value, dof: dofBox.checked, prediction: predictBox.checked });
 }
 
 let lastGaze = { x: 0.5, y: 0.5 };
@@ -146,6 +149,7 @@ function sendGaze(x, y) {
 }
 
 canvas.addEventListener('mousemove', (ev) => {
+  if (autoBox.checked) return;
   const r = canvas.getBoundingClientRect();
   const clamp = (v) => Math.min(1, Math.max(0, v));
   sendGaze(clamp((ev.clientX - r.left) / r.width), clamp((ev.clientY - r.top) / r.height));
@@ -155,7 +159,25 @@ pupilRange.addEventListener('input', () => {
   document.getElementById('pupil-mm').textContent = Number(pupilRange.value).toFixed(1);
   sendGaze(lastGaze.x, lastGaze.y);
 });
-for (const el of [presetSel, overlaySel, dofBox]) el.addEventListener('change', sendSettings);
+for (const el of [presetSel, overlaySel, dofBox, predictBox]) el.addEventListener('change', sendSettings);
+
+// Auto gaze: the synthetic eye at 120 Hz. Blinks send nothing (the server keeps the last gaze).
+let autoTimer = null;
+autoBox.addEventListener('change', () => {
+  clearInterval(autoTimer);
+  autoTimer = null;
+  if (!autoBox.checked) return;
+  const eye = new SyntheticEye(1, { widthCm: 53, distanceCm: 60, aspect: canvas.height / canvas.width });
+  const t0 = performance.now();
+  autoTimer = setInterval(() => {
+    const { deg, pupil } = eye.step(performance.now() - t0);
+    if (!deg) return;
+    const [x, y] = eye.toFrame(deg);
+    const clamp = (v) => Math.min(1, Math.max(0, v));
+    lastGaze = { x: clamp(x), y: clamp(y) };
+    send({ type: 'gaze', seq: ++state.seq, t_ms: performance.now(), x: lastGaze.x, y: lastGaze.y, pupil_mm: pupil });
+  }, 8);
+});
 for (const sel of [sceneSel, sizeSel, codecSel]) sel.addEventListener('change', connect);
 setInterval(() => {
   overlay.textContent = overlayText(state.stats, state.lastHeader, performance.now());

@@ -5,6 +5,7 @@ const FILES: &[(&str, &str, &[u8])] = &[
     ("/app.js", "text/javascript; charset=utf-8", include_bytes!("../../web/app.js")),
     ("/overlay.js", "text/javascript; charset=utf-8", include_bytes!("../../web/overlay.js")),
     ("/style.css", "text/css; charset=utf-8", include_bytes!("../../web/style.css")),
+    ("/synthetic-eye.js", "text/javascript; charset=utf-8", include_bytes!("../../web/synthetic-eye.js")),
     ("/favicon.svg", "image/svg+xml", include_bytes!("../../web/favicon.svg")),
 ];
 

@@ -129,3 +129,27 @@ test('the page streams frames and the server-drawn marker follows the mouse', as
   assert.deepEqual(errors, [], 'the server reported no protocol errors to the page');
   await page.close();
 });
+
+test('auto gaze drives the frames with the synthetic eye', async () => {
+  const page = await browser.newPage({ viewport: { width: 900, height: 700 } });
+  const consoleErrors = [];
+  page.on('console', (m) => { if (m.type() === 'error') consoleErrors.push(m.text()); });
+  await page.goto(`${baseUrl}/`);
+  await page.waitForFunction(() => window.fovea && window.fovea.framesShown >= 1, null, { timeout: 30_000 });
+  await page.check('#auto-gaze');
+  // Without touching the mouse, frames keep arriving for gaze positions that change.
+  const seen = await page.evaluate(async () => {
+    const positions = new Set();
+    const until = performance.now() + 8000;
+    while (performance.now() < until && positions.size < 4) {
+      const h = window.fovea.lastHeader;
+      if (h && h.seq !== null) positions.add(`${h.gaze.x.toFixed(3)},${h.gaze.y.toFixed(3)}`);
+      await new Promise((r) => setTimeout(r, 100));
+    }
+    return positions.size;
+  });
+  assert.ok(seen >= 4, `the synthetic eye moved the gaze (${seen} distinct positions)`);
+  assert.deepEqual(consoleErrors, []);
+  assert.deepEqual(await page.evaluate(() => window.fovea.errors), []);
+  await page.close();
+});
