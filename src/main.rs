@@ -32,6 +32,13 @@ enum Command {
         /// replayable with `fovea replay`).
         #[arg(long)]
         record_dir: Option<PathBuf>,
+        /// Sessions served at once; more are refused (WebSocket close 1013, /readyz 503).
+        #[arg(long, default_value_t = 16, value_parser = clap::value_parser!(u64).range(1..=10000))]
+        max_sessions: u64,
+        /// Seconds a client may leave frames unacknowledged (or stop reading) before it is
+        /// disconnected.
+        #[arg(long, default_value_t = 10.0)]
+        stall_timeout_s: f64,
     },
     /// Render one frame to an image file, without a server.
     ///
@@ -98,6 +105,51 @@ enum Command {
     /// Evaluate gaze prediction on a recording: angular error at several horizons, holding the
     /// last sample vs predicting, for fixation and saccade samples.
     Gaze(GazeArgs),
+    /// Load-test a server: N concurrent sessions driven by the synthetic eye for a fixed time,
+    /// acknowledging frames like real clients. Reports gaze-to-frame latency and the server's
+    /// stage times as HDR percentiles, fps per session and in total, fairness, errors and
+    /// refusals; writes DIR/load.json and DIR/load.svg. Loopback targets only.
+    Load(LoadArgs),
+}
+
+#[derive(clap::Args)]
+struct LoadArgs {
+    #[arg(long, default_value = "ws://127.0.0.1:8080/ws")]
+    url: String,
+    /// Concurrent sessions.
+    #[arg(long, default_value_t = 4)]
+    sessions: usize,
+    /// Run several session counts in turn (e.g. 1,2,4,8) and report where the budget breaks.
+    #[arg(long)]
+    sweep: Option<String>,
+    /// Seconds per run (bounded: at most 600).
+    #[arg(long, default_value_t = 30.0)]
+    duration: f64,
+    /// Milliseconds between session starts.
+    #[arg(long, default_value_t = 100.0)]
+    ramp_up_ms: f64,
+    /// Gaze samples per second per session.
+    #[arg(long, default_value_t = 120.0)]
+    rate_hz: f64,
+    #[arg(long, default_value = fovea::scene::DEFAULT_SCENE)]
+    scene: String,
+    #[arg(long, default_value = "balanced")]
+    preset: String,
+    #[arg(long, default_value_t = 640)]
+    width: u32,
+    #[arg(long, default_value_t = 480)]
+    height: u32,
+    /// Sweep budget: p95 gaze-to-frame latency, ms.
+    #[arg(long, default_value_t = 500.0)]
+    budget_ms: f64,
+    /// Sweep budget: slowest session's frames per second.
+    #[arg(long, default_value_t = 2.0)]
+    min_fps: f64,
+    /// Synthetic-eye seed.
+    #[arg(long, default_value_t = 1)]
+    seed: u32,
+    #[arg(long)]
+    out: PathBuf,
 }
 
 #[derive(clap::Args)]
@@ -359,10 +411,18 @@ fn main() -> Result<()> {
         .with_writer(std::io::stderr)
         .init();
     match Cli::parse().command {
-        Command::Serve { addr, record_dir } => serve(addr, fovea::server::ServerOptions { record_dir }),
+        Command::Serve { addr, record_dir, max_sessions, stall_timeout_s } => serve(
+            addr,
+            fovea::server::ServerOptions {
+                record_dir,
+                max_sessions: max_sessions as usize,
+                stall_timeout: std::time::Duration::from_secs_f64(stall_timeout_s.clamp(0.1, 3600.0)),
+            },
+        ),
         Command::Bench(args) => bench(args),
         Command::Replay(args) => replay(args),
         Command::Gaze(args) => gaze(args),
+        Command::Load(args) => load(args),
         Command::Render {
             scene,
             width,
@@ -506,6 +566,78 @@ fn replay(a: ReplayArgs) -> Result<()> {
     }
     println!("{}", serde_json::to_string_pretty(&summary)?);
     eprintln!("wrote {}/frames.csv and summary.json", a.out.display());
+    Ok(())
+}
+
+fn load(a: LoadArgs) -> Result<()> {
+    let url = url_is_allowed(&a.url)?;
+    let counts: Vec<usize> = match &a.sweep {
+        Some(s) => s.split(',').map(|n| n.trim().parse::<usize>()).collect::<Result<_, _>>().context("--sweep: session counts like 1,2,4,8")?,
+        None => vec![a.sessions],
+    };
+    if counts.iter().any(|n| *n == 0 || *n > 256) {
+        bail!("session counts run from 1 to 256");
+    }
+    let duration = std::time::Duration::from_secs_f64(a.duration.clamp(1.0, 600.0));
+    let runtime = tokio::runtime::Runtime::new()?;
+    let mut reports = Vec::new();
+    std::fs::create_dir_all(&a.out).with_context(|| format!("creating {}", a.out.display()))?;
+    for n in counts {
+        let opts = fovea::client::load::LoadOptions {
+            url: url.clone(),
+            sessions: n,
+            duration,
+            ramp_up: std::time::Duration::from_secs_f64(a.ramp_up_ms.max(0.0) / 1000.0),
+            rate_hz: a.rate_hz,
+            hello: fovea::protocol::Hello { scene: a.scene.clone(), preset: a.preset.clone(), width: a.width, height: a.height, ..Default::default() },
+            seed: a.seed,
+        };
+        let total = duration.as_secs_f64();
+        let report = runtime.block_on(fovea::client::load::run(&opts, move |sessions, t| {
+            eprint!("\r{sessions} sessions: {t:.0}/{total:.0} s");
+        }));
+        eprintln!();
+        println!(
+            "{} sessions: {} frames, {:.2} fps total, {:.2}–{:.2} fps per session (fairness {:.2}), gaze→frame p50 {:.1} p95 {:.1} p99 {:.1} max {:.1} ms; render p50 {:.1} ms; errors {}, refused {}, failed {}",
+            n,
+            report.frames,
+            report.fps_total,
+            report.fps_min,
+            report.fps_max,
+            report.fairness,
+            report.latency_ms.p50,
+            report.latency_ms.p95,
+            report.latency_ms.p99,
+            report.latency_ms.max,
+            report.stages_ms.get("render").map(|p| p.p50).unwrap_or(f64::NAN),
+            report.errors,
+            report.refused,
+            report.connection_failures
+        );
+        std::fs::write(a.out.join(format!("load-{n}.svg")), fovea::client::load::svg(&report))?;
+        reports.push(report);
+    }
+    let capacity = reports
+        .iter()
+        .filter(|r| r.latency_ms.p95 <= a.budget_ms && r.fps_min >= a.min_fps && r.refused == 0 && r.connection_failures == 0)
+        .map(|r| r.sessions)
+        .max();
+    let json = serde_json::json!({
+        "url": url,
+        "scene": a.scene, "preset": a.preset, "width": a.width, "height": a.height, "rate_hz": a.rate_hz,
+        "budget": { "p95_ms": a.budget_ms, "min_fps": a.min_fps },
+        "capacity_sessions": capacity,
+        "runs": reports,
+    });
+    std::fs::write(a.out.join("load.json"), serde_json::to_string_pretty(&json)?)?;
+    if let Some(last) = reports.last() {
+        std::fs::write(a.out.join("load.svg"), fovea::client::load::svg(last))?;
+    }
+    match capacity {
+        Some(c) => println!("capacity within budget (p95 ≤ {} ms, ≥ {} fps per session): {c} sessions", a.budget_ms, a.min_fps),
+        None => println!("no session count met the budget (p95 ≤ {} ms, ≥ {} fps per session)", a.budget_ms, a.min_fps),
+    }
+    eprintln!("wrote {}/load.json and load.svg", a.out.display());
     Ok(())
 }
 

@@ -15,7 +15,8 @@ async fn server(record: Option<std::path::PathBuf>) -> (String, CancellationToke
     let listener = tokio::net::TcpListener::bind("127.0.0.1:0").await.unwrap();
     let url = format!("ws://{}/ws", listener.local_addr().unwrap());
     let shutdown = CancellationToken::new();
-    tokio::spawn(fovea::server::run_with(listener, render, shutdown.clone(), fovea::server::ServerOptions { record_dir: record }));
+    let options = fovea::server::ServerOptions { record_dir: record, ..Default::default() };
+    tokio::spawn(fovea::server::run_with(listener, render, shutdown.clone(), options));
     (url, shutdown)
 }
 

@@ -2,6 +2,7 @@
 //! gaze recording to a server at its recorded timing and records every frame that comes back.
 
 mod connection;
+pub mod load;
 pub mod replay;
 
 pub use connection::{Client, ClientError, Event};

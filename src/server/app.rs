@@ -1,6 +1,6 @@
 use std::sync::Arc;
 
-use axum::extract::ws::WebSocketUpgrade;
+use axum::extract::ws::{CloseFrame, Message, WebSocketUpgrade};
 use axum::extract::State;
 use axum::http::{header, StatusCode, Uri};
 use axum::response::{IntoResponse, Response};
@@ -13,19 +13,51 @@ pub fn router(state: Arc<ServerState>) -> Router {
     Router::new()
         .route("/ws", get(websocket))
         .route("/healthz", get(|| async { "ok\n" }))
+        .route("/readyz", get(readyz))
+        .route("/metrics", get(metrics_text))
         .fallback(get(static_file))
         .with_state(state)
 }
 
+/// Ready while a session slot is free: load balancers send new viewers elsewhere otherwise.
+async fn readyz(State(state): State<Arc<ServerState>>) -> Response {
+    if state.slots.available_permits() > 0 {
+        (StatusCode::OK, "ready\n").into_response()
+    } else {
+        (StatusCode::SERVICE_UNAVAILABLE, format!("at capacity: {} sessions\n", state.max_sessions)).into_response()
+    }
+}
+
+async fn metrics_text() -> Response {
+    match super::metrics::handle() {
+        Some(h) => ([(header::CONTENT_TYPE, "text/plain; version=0.0.4")], h.render()).into_response(),
+        None => (StatusCode::SERVICE_UNAVAILABLE, "metrics are unavailable in this process\n").into_response(),
+    }
+}
+
 async fn websocket(State(state): State<Arc<ServerState>>, ws: WebSocketUpgrade) -> Response {
-    let id = state.next_session.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+    let permit = state.slots.clone().try_acquire_owned().ok();
     let token = state.sessions.token();
-    ws.max_message_size(HARD_MESSAGE_LIMIT)
-        .max_frame_size(HARD_MESSAGE_LIMIT)
-        .on_upgrade(move |socket| async move {
-            session::run(socket, state, id).await;
+    let ws = ws.max_message_size(HARD_MESSAGE_LIMIT).max_frame_size(HARD_MESSAGE_LIMIT);
+    let Some(permit) = permit else {
+        // Refused politely over the socket, so browsers see the reason: 1013 "try again later".
+        ::metrics::counter!("fovea_sessions_refused_total").increment(1);
+        let max = state.max_sessions;
+        return ws.on_upgrade(move |mut socket| async move {
+            let reason = format!("server at capacity ({max} sessions); try again later");
+            let _ = socket.send(Message::Close(Some(CloseFrame { code: 1013, reason: reason.into() }))).await;
             drop(token);
-        })
+        });
+    };
+    let id = state.next_session.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+    ws.on_upgrade(move |socket| async move {
+        ::metrics::gauge!("fovea_sessions_active").increment(1.0);
+        ::metrics::counter!("fovea_sessions_total").increment(1);
+        session::run(socket, state, id).await;
+        ::metrics::gauge!("fovea_sessions_active").decrement(1.0);
+        drop(permit);
+        drop(token);
+    })
 }
 
 async fn static_file(uri: Uri) -> Response {

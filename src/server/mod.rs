@@ -4,6 +4,7 @@
 
 mod app;
 mod assets;
+pub mod metrics;
 mod recorder;
 mod session;
 
@@ -43,13 +44,29 @@ pub struct ServerState {
     pub sessions: TaskTracker,
     /// Where sessions' received gaze samples are recorded, if anywhere (opt-in).
     pub record_dir: Option<std::path::PathBuf>,
+    /// One permit per session: admission control (a new client past the limit is refused
+    /// with 1013 and `/readyz` reports not ready).
+    pub slots: Arc<tokio::sync::Semaphore>,
+    pub max_sessions: usize,
+    /// A client that neither acknowledges frames nor reads for this long is disconnected.
+    pub stall_timeout: Duration,
 }
 
 /// How a server runs beyond its listener and renderer.
-#[derive(Debug, Clone, Default)]
+#[derive(Debug, Clone)]
 pub struct ServerOptions {
     /// Record every session's received gaze samples to `session-<id>.csv` here.
     pub record_dir: Option<std::path::PathBuf>,
+    /// Sessions served at once; more are refused with WebSocket close code 1013.
+    pub max_sessions: usize,
+    /// Disconnect a client with frames outstanding and no acknowledgement for this long.
+    pub stall_timeout: Duration,
+}
+
+impl Default for ServerOptions {
+    fn default() -> Self {
+        ServerOptions { record_dir: None, max_sessions: 16, stall_timeout: Duration::from_secs(10) }
+    }
 }
 
 /// Serves until `shutdown` is cancelled, then closes every session with 1001 and returns.
@@ -79,7 +96,11 @@ pub async fn run_with(listener: TcpListener, render: RenderHandle, shutdown: Can
         shutdown: shutdown.clone(),
         sessions: TaskTracker::new(),
         record_dir: options.record_dir,
+        slots: Arc::new(tokio::sync::Semaphore::new(options.max_sessions.max(1))),
+        max_sessions: options.max_sessions.max(1),
+        stall_timeout: options.stall_timeout,
     });
+    let _ = metrics::handle();
     let app = router(state.clone());
     // Frames and gaze samples are small and latency-bound: Nagle's algorithm would hold them
     // back for tens of milliseconds waiting for delayed ACKs.

@@ -77,6 +77,8 @@ pub async fn run(socket: WebSocket, state: Arc<ServerState>, id: u64) {
     }
     let mut making: Option<Making> = None;
     let mut sent = 0u64;
+    // Last sign of life while frames are outstanding (an ack, or sending a frame).
+    let mut last_progress = Instant::now();
     let close = loop {
         if making.is_none() {
             if let Some(job) = s.next_job(id) {
@@ -84,9 +86,17 @@ pub async fn run(socket: WebSocket, state: Arc<ServerState>, id: u64) {
             }
         }
         let mut replies: Vec<Message> = Vec::new();
+        let stalled = !s.unacked.is_empty() && making.is_none();
+        let stall_at = tokio::time::Instant::from_std(last_progress + state.stall_timeout);
         tokio::select! {
             _ = state.shutdown.cancelled() => {
                 break Some(CloseFrame { code: 1001, reason: "server shutting down".into() });
+            }
+            _ = tokio::time::sleep_until(stall_at), if stalled => {
+                ::metrics::counter!("fovea_sessions_stalled_total").increment(1);
+                tracing::info!(session = id, "disconnecting a stalled client");
+                let reason = format!("no frame acknowledged for {} s: disconnected", state.stall_timeout.as_secs());
+                break Some(CloseFrame { code: 1008, reason: reason.into() });
             }
             msg = rx.next() => match msg {
                 None => break None,
@@ -96,8 +106,16 @@ pub async fn run(socket: WebSocket, state: Arc<ServerState>, id: u64) {
                 }
                 Some(Ok(Message::Close(_))) => break None,
                 Some(Ok(Message::Text(text))) => {
+                    let unacked = s.unacked.len();
                     if let Some(reply) = s.on_text(text.as_str(), &state, id) {
+                        if let ServerMessage::Error(e) = &reply {
+                            let code = serde_json::to_value(e.code).ok().and_then(|v| v.as_str().map(str::to_string)).unwrap_or_default();
+                            ::metrics::counter!("fovea_errors_total", "code" => code).increment(1);
+                        }
                         replies.push(Message::Text(reply.to_json().into()));
+                    }
+                    if s.unacked.len() < unacked {
+                        last_progress = Instant::now();
                     }
                 }
                 Some(Ok(Message::Binary(_))) => {
@@ -114,6 +132,7 @@ pub async fn run(socket: WebSocket, state: Arc<ServerState>, id: u64) {
                         replies.push(Message::Binary(bytes.into()));
                         let ms = arrived.elapsed().as_secs_f64() * 1e3;
                         s.latency_ms = Some(s.latency_ms.map_or(ms, |l| 0.8 * l + 0.2 * ms));
+                        last_progress = Instant::now();
                     }
                     Err(e) => {
                         // The frame is gone: give its credit back so the session does not stall.
@@ -121,13 +140,22 @@ pub async fn run(socket: WebSocket, state: Arc<ServerState>, id: u64) {
                             s.unacked.remove(&last);
                         }
                         tracing::warn!(session = id, "frame failed: {}", e.message);
+                        ::metrics::counter!("fovea_frames_failed_total").increment(1);
                         replies.push(Message::Text(ServerMessage::from(e).to_json().into()));
                     }
                 }
             }
         }
         for reply in replies {
-            if tx.send(reply).await.is_err() {
+            let frame = matches!(reply, Message::Binary(_));
+            let started = Instant::now();
+            // A client that stops reading fills its socket; it may not hold the session forever.
+            let sent_ok = matches!(tokio::time::timeout(state.stall_timeout, tx.send(reply)).await, Ok(Ok(())));
+            if frame && sent_ok {
+                ::metrics::counter!("fovea_frames_sent_total").increment(1);
+                super::metrics::stage("send", started.elapsed().as_secs_f64() * 1e3);
+            }
+            if !sent_ok {
                 tracing::debug!(session = id, "client went away while we were sending");
                 s.finish_recording(id);
                 state.render.release(id);
@@ -166,8 +194,10 @@ impl Session {
                     return Some(no_hello("gaze"));
                 }
                 self.samples += 1;
+                ::metrics::counter!("fovea_gaze_samples_total").increment(1);
                 if self.latest.is_some() {
                     self.coalesced += 1;
+                    ::metrics::counter!("fovea_gaze_coalesced_total").increment(1);
                 }
                 self.latest = Some((gaze, Instant::now()));
                 if gaze.pupil_mm.is_some() {
@@ -334,6 +364,10 @@ async fn make_frame(state: Arc<ServerState>, job: FrameJob) -> Result<(Vec<u8>, 
     .map_err(|e| failed("encoder task", &e))?;
     let (image, encode_time) = encoded.map_err(|e| failed("encode", &e))?;
     let [x, y] = job.request.gaze;
+    super::metrics::stage("queue", queue);
+    super::metrics::stage("render", render_ms);
+    super::metrics::stage("readback", readback_ms);
+    super::metrics::stage("encode", encode_time.as_secs_f64() * 1e3);
     let header = FrameHeader {
         frame: job.frame,
         seq: job.gaze.map(|g| g.seq),

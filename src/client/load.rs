@@ -1,0 +1,304 @@
+//! `fovea load`: N concurrent sessions driven by the synthetic eye against a server for a fixed
+//! time, each acknowledging frames like a real client, measuring gaze-to-frame-received latency
+//! on its own clock and the server's stage breakdown from the headers. Histograms are HDR
+//! (microsecond resolution), never averages.
+
+use std::collections::BTreeMap;
+use std::sync::{Arc, Mutex};
+use std::time::{Duration, Instant};
+
+use futures_util::{SinkExt, StreamExt};
+use hdrhistogram::Histogram;
+use serde::Serialize;
+use tokio_tungstenite::tungstenite::Message;
+
+use crate::gaze::synthetic::{degrees_to_frame, SyntheticEye};
+use crate::optics::acuity::Viewing;
+use crate::protocol::{decode_frame, Hello};
+
+#[derive(Debug, Clone)]
+pub struct LoadOptions {
+    pub url: String,
+    pub sessions: usize,
+    pub duration: Duration,
+    /// Delay between session starts.
+    pub ramp_up: Duration,
+    /// Gaze samples per second per session.
+    pub rate_hz: f64,
+    pub hello: Hello,
+    pub seed: u32,
+}
+
+#[derive(Debug, Clone, Copy, Serialize, PartialEq)]
+pub struct Percentiles {
+    pub count: u64,
+    pub p50: f64,
+    pub p90: f64,
+    pub p95: f64,
+    pub p99: f64,
+    pub max: f64,
+}
+
+fn percentiles(h: &Histogram<u64>) -> Percentiles {
+    let ms = |v: u64| v as f64 / 1000.0;
+    Percentiles {
+        count: h.len(),
+        p50: ms(h.value_at_quantile(0.5)),
+        p90: ms(h.value_at_quantile(0.9)),
+        p95: ms(h.value_at_quantile(0.95)),
+        p99: ms(h.value_at_quantile(0.99)),
+        max: ms(h.max()),
+    }
+}
+
+#[derive(Debug, Clone, Serialize)]
+pub struct LoadReport {
+    pub sessions: usize,
+    pub seconds: f64,
+    pub rate_hz: f64,
+    pub frames: u64,
+    pub fps_total: f64,
+    pub fps_per_session: Vec<f64>,
+    pub fps_min: f64,
+    pub fps_max: f64,
+    /// Slowest session's fps over the fastest's (1 is perfectly fair).
+    pub fairness: f64,
+    /// Gaze-to-frame-received, client clock.
+    pub latency_ms: Percentiles,
+    /// Server stages from the frame headers, and the CDF points for plotting.
+    pub stages_ms: BTreeMap<String, Percentiles>,
+    pub gaze_sent: u64,
+    pub errors: u64,
+    pub connection_failures: u64,
+    /// Sessions the server refused (close 1013).
+    pub refused: u64,
+    /// Frames received per second of the run, all sessions together.
+    pub fps_timeline: Vec<u64>,
+    #[serde(skip)]
+    pub histograms: BTreeMap<String, Histogram<u64>>,
+}
+
+#[derive(Default)]
+struct SessionResult {
+    frames: u64,
+    active_s: f64,
+    gaze_sent: u64,
+    errors: u64,
+    connect_failed: bool,
+    refused: bool,
+}
+
+fn histogram() -> Histogram<u64> {
+    // 1 µs to 60 s, 3 significant digits.
+    Histogram::new_with_bounds(1, 60_000_000, 3).unwrap_or_else(|_| Histogram::new(3).expect("valid sigfig"))
+}
+
+/// Runs the load and merges every session's measurements.
+pub async fn run(opts: &LoadOptions, progress: impl Fn(usize, f64) + Send + Sync + 'static) -> LoadReport {
+    let stage_names = ["latency", "queue", "render", "readback", "encode"];
+    let hists: Arc<Mutex<BTreeMap<String, Histogram<u64>>>> =
+        Arc::new(Mutex::new(stage_names.iter().map(|n| (n.to_string(), histogram())).collect()));
+    let timeline = Arc::new(Mutex::new(vec![0u64; opts.duration.as_secs() as usize + 2]));
+    let started = Instant::now();
+    let deadline = started + opts.duration;
+    let progress = Arc::new(progress);
+    let mut tasks = Vec::new();
+    for i in 0..opts.sessions {
+        let opts = opts.clone();
+        let (hists, timeline, progress) = (hists.clone(), timeline.clone(), progress.clone());
+        tasks.push(tokio::spawn(async move {
+            tokio::time::sleep(opts.ramp_up * i as u32).await;
+            session(i, &opts, deadline, started, hists, timeline, progress).await
+        }));
+    }
+    let mut results = Vec::new();
+    for t in tasks {
+        results.push(t.await.unwrap_or_default());
+    }
+    let seconds = started.elapsed().as_secs_f64();
+    let hists = hists.lock().map(|h| h.clone()).unwrap_or_default();
+    let fps: Vec<f64> = results.iter().filter(|r| !r.connect_failed && !r.refused).map(|r| r.frames as f64 / r.active_s.max(1e-9)).collect();
+    let (fps_min, fps_max) = fps.iter().fold((f64::INFINITY, 0.0f64), |(a, b), v| (a.min(*v), b.max(*v)));
+    let frames: u64 = results.iter().map(|r| r.frames).sum();
+    LoadReport {
+        sessions: opts.sessions,
+        seconds,
+        rate_hz: opts.rate_hz,
+        frames,
+        fps_total: frames as f64 / seconds.max(1e-9),
+        fairness: if fps_max > 0.0 { fps_min / fps_max } else { 0.0 },
+        fps_min: if fps.is_empty() { 0.0 } else { fps_min },
+        fps_max,
+        fps_per_session: fps,
+        latency_ms: percentiles(&hists["latency"]),
+        stages_ms: hists.iter().filter(|(k, _)| k.as_str() != "latency").map(|(k, h)| (k.clone(), percentiles(h))).collect(),
+        gaze_sent: results.iter().map(|r| r.gaze_sent).sum(),
+        errors: results.iter().map(|r| r.errors).sum(),
+        connection_failures: results.iter().filter(|r| r.connect_failed).count() as u64,
+        refused: results.iter().filter(|r| r.refused).count() as u64,
+        fps_timeline: timeline.lock().map(|t| t.clone()).unwrap_or_default(),
+        histograms: hists,
+    }
+}
+
+#[allow(clippy::too_many_arguments)]
+async fn session(
+    index: usize,
+    opts: &LoadOptions,
+    deadline: Instant,
+    started: Instant,
+    hists: Arc<Mutex<BTreeMap<String, Histogram<u64>>>>,
+    timeline: Arc<Mutex<Vec<u64>>>,
+    progress: Arc<impl Fn(usize, f64) + Send + Sync>,
+) -> SessionResult {
+    let mut result = SessionResult::default();
+    let Ok((ws, _)) = tokio_tungstenite::connect_async_with_config(&opts.url, None, true).await else {
+        result.connect_failed = true;
+        return result;
+    };
+    let (mut sink, mut stream) = ws.split();
+    let mut hello = serde_json::to_value(&opts.hello).unwrap_or_default();
+    hello["type"] = "hello".into();
+    if sink.send(Message::Text(hello.to_string().into())).await.is_err() {
+        result.connect_failed = true;
+        return result;
+    }
+    // The welcome, or a refusal.
+    loop {
+        match stream.next().await {
+            Some(Ok(Message::Text(t))) if t.as_str().contains("\"welcome\"") => break,
+            Some(Ok(Message::Text(_))) => {
+                result.errors += 1;
+                return result;
+            }
+            Some(Ok(Message::Close(frame))) => {
+                result.refused = frame.is_some_and(|f| u16::from(f.code) == 1013);
+                result.connect_failed = !result.refused;
+                return result;
+            }
+            Some(Ok(_)) => continue,
+            _ => {
+                result.connect_failed = true;
+                return result;
+            }
+        }
+    }
+    let session_start = Instant::now();
+    let (out_tx, mut out_rx) = tokio::sync::mpsc::unbounded_channel::<Option<String>>();
+    let writer = tokio::spawn(async move {
+        while let Some(Some(text)) = out_rx.recv().await {
+            if sink.send(Message::Text(text.into())).await.is_err() {
+                break;
+            }
+        }
+        let _ = sink.close().await;
+    });
+    let sent_at: Arc<Mutex<BTreeMap<u64, f64>>> = Arc::new(Mutex::new(BTreeMap::new()));
+    let reader = {
+        let (sent_at, acks, hists, timeline) = (sent_at.clone(), out_tx.clone(), hists.clone(), timeline.clone());
+        tokio::spawn(async move {
+            let (mut frames, mut errors) = (0u64, 0u64);
+            while let Some(Ok(msg)) = stream.next().await {
+                match msg {
+                    Message::Binary(bytes) => {
+                        let now = session_start.elapsed().as_secs_f64() * 1e3;
+                        let Ok((h, _)) = decode_frame(&bytes) else { continue };
+                        let _ = acks.send(Some(format!(r#"{{"type":"ack","frame":{}}}"#, h.frame)));
+                        frames += 1;
+                        if let Ok(mut t) = timeline.lock() {
+                            let s = started.elapsed().as_secs() as usize;
+                            if let Some(slot) = t.get_mut(s) {
+                                *slot += 1;
+                            }
+                        }
+                        let latency = h.seq.and_then(|s| sent_at.lock().ok().and_then(|m| m.get(&s).copied())).map(|t| now - t);
+                        if let Ok(mut hs) = hists.lock() {
+                            let mut rec = |k: &str, ms: f64| {
+                                if let Some(hh) = hs.get_mut(k) {
+                                    let _ = hh.record((ms * 1000.0).max(1.0) as u64);
+                                }
+                            };
+                            if let Some(l) = latency {
+                                rec("latency", l);
+                            }
+                            rec("queue", h.stages_ms.queue);
+                            rec("render", h.stages_ms.render);
+                            rec("readback", h.stages_ms.readback);
+                            rec("encode", h.stages_ms.encode);
+                        }
+                    }
+                    Message::Text(t) if t.as_str().contains("\"error\"") => errors += 1,
+                    Message::Close(_) => break,
+                    _ => {}
+                }
+            }
+            (frames, errors)
+        })
+    };
+    let viewing = Viewing { width: opts.hello.width, height: opts.hello.height, width_cm: opts.hello.display.width_cm, distance_cm: opts.hello.display.distance_cm };
+    let mut eye = SyntheticEye::new(opts.seed.wrapping_add(index as u32), &viewing);
+    let period = Duration::from_secs_f64(1.0 / opts.rate_hz.clamp(1.0, 10_000.0));
+    let mut tick = tokio::time::interval(period);
+    let mut seq = 0u64;
+    while Instant::now() < deadline {
+        tick.tick().await;
+        let t = session_start.elapsed().as_secs_f64() * 1e3;
+        let (deg, pupil) = eye.step(t);
+        let Some(deg) = deg else { continue };
+        let [x, y] = degrees_to_frame(&viewing, deg).map(|v| v.clamp(0.0, 1.0));
+        seq += 1;
+        if let Ok(mut m) = sent_at.lock() {
+            m.insert(seq, t);
+        }
+        let pupil = pupil.map(|p| format!(r#","pupil_mm":{p}"#)).unwrap_or_default();
+        if out_tx.send(Some(format!(r#"{{"type":"gaze","seq":{seq},"t_ms":{t},"x":{x},"y":{y}{pupil}}}"#))).is_err() {
+            break;
+        }
+        result.gaze_sent += 1;
+        if index == 0 && seq % (opts.rate_hz as u64).max(1) == 0 {
+            progress(opts.sessions, started.elapsed().as_secs_f64());
+        }
+    }
+    let _ = out_tx.send(None);
+    let _ = writer.await;
+    if let Ok(Ok((frames, errors))) = tokio::time::timeout(Duration::from_secs(10), reader).await {
+        result.frames = frames;
+        result.errors += errors;
+    }
+    result.active_s = session_start.elapsed().as_secs_f64().min(deadline.saturating_duration_since(session_start).as_secs_f64().max(1e-3));
+    result
+}
+
+/// A two-panel SVG: latency CDFs per stage, and frames per second over the run.
+pub fn svg(report: &LoadReport) -> String {
+    use std::fmt::Write;
+    let (w, h, pad) = (900.0, 380.0, 50.0);
+    let mut s = format!(r#"<svg xmlns="http://www.w3.org/2000/svg" width="{w}" height="{h}" font-family="sans-serif" font-size="11"><rect width="100%" height="100%" fill="white"/>"#);
+    let _ = write!(s, r#"<text x="{pad}" y="20" font-size="14" font-weight="bold">fovea load: {} sessions, {:.0} s, {:.1} fps total, p95 gaze→frame {:.1} ms</text>"#, report.sessions, report.seconds, report.fps_total, report.latency_ms.p95);
+    let max_ms = report.histograms.values().map(|h| h.value_at_quantile(0.99) as f64 / 1000.0).fold(1.0, f64::max) * 1.1;
+    let (pw, ph, top) = (380.0, 280.0, 50.0);
+    let _ = write!(s, r##"<rect x="{pad}" y="{top}" width="{pw}" height="{ph}" fill="none" stroke="#444"/><text x="{}" y="{}" text-anchor="middle">ms (to p99)</text><text x="{pad}" y="{}">CDF per stage</text>"##, pad + pw / 2.0, top + ph + 28.0, top - 6.0);
+    let colours = ["#d62728", "#1f77b4", "#2ca02c", "#9467bd", "#ff7f0e"];
+    for (i, (name, hist)) in report.histograms.iter().enumerate() {
+        if hist.is_empty() {
+            continue;
+        }
+        let pts: Vec<String> = (0..=50)
+            .map(|k| {
+                let q = f64::from(k) / 50.0;
+                let v = hist.value_at_quantile(q) as f64 / 1000.0;
+                format!("{:.1},{:.1}", pad + (v / max_ms).min(1.0) * pw, top + ph - q * ph)
+            })
+            .collect();
+        let c = colours[i % colours.len()];
+        let _ = write!(s, r#"<polyline points="{}" fill="none" stroke="{c}" stroke-width="2"/><text x="{}" y="{}" fill="{c}">{name}</text>"#, pts.join(" "), pad + pw + 8.0, top + 14.0 * (i as f64 + 1.0));
+    }
+    let x0 = pad + pw + 90.0;
+    let pw2 = w - x0 - 20.0;
+    let peak = report.fps_timeline.iter().copied().max().unwrap_or(1).max(1) as f64;
+    let n = report.fps_timeline.len().max(1) as f64;
+    let _ = write!(s, r##"<rect x="{x0}" y="{top}" width="{pw2}" height="{ph}" fill="none" stroke="#444"/><text x="{x0}" y="{}">frames per second (all sessions), peak {peak}</text>"##, top - 6.0);
+    let pts: Vec<String> = report.fps_timeline.iter().enumerate().map(|(i, v)| format!("{:.1},{:.1}", x0 + (i as f64 + 0.5) / n * pw2, top + ph - *v as f64 / peak * ph)).collect();
+    let _ = write!(s, r##"<polyline points="{}" fill="none" stroke="#1f77b4" stroke-width="2"/></svg>"##, pts.join(" "));
+    s
+}

@@ -1,0 +1,141 @@
+//! The server under load, on loopback, bounded in count and time: admission control, stalled
+//! clients, fairness, and the load tool's report against the server's own /metrics.
+
+use std::net::SocketAddr;
+use std::time::Duration;
+
+use fovea::client::load::{run, LoadOptions};
+use fovea::client::{Client, Event};
+use fovea::protocol::{Ack, Gaze, Hello};
+use fovea::render::{RenderThread, Renderer};
+use fovea::server::ServerOptions;
+use tokio::io::{AsyncReadExt, AsyncWriteExt};
+use tokio_util::sync::CancellationToken;
+
+const WAIT: Duration = Duration::from_secs(30);
+/// The metrics recorder is process-wide: tests that read /metrics must not overlap.
+static SERIAL: tokio::sync::Mutex<()> = tokio::sync::Mutex::const_new(());
+
+async fn server(options: ServerOptions) -> (SocketAddr, CancellationToken) {
+    let renderer = Renderer::new().unwrap_or_else(|e| panic!("GPU tests need an adapter: {e}"));
+    let (render, _) = RenderThread::spawn(renderer).unwrap();
+    let listener = tokio::net::TcpListener::bind("127.0.0.1:0").await.unwrap();
+    let addr = listener.local_addr().unwrap();
+    let shutdown = CancellationToken::new();
+    tokio::spawn(fovea::server::run_with(listener, render, shutdown.clone(), options));
+    (addr, shutdown)
+}
+
+fn small() -> Hello {
+    Hello { scene: "bunny".into(), width: 64, height: 48, preset: "fast".into(), ..Hello::default() }
+}
+
+async fn http_get(addr: SocketAddr, path: &str) -> String {
+    let mut s = tokio::net::TcpStream::connect(addr).await.unwrap();
+    s.write_all(format!("GET {path} HTTP/1.1\r\nHost: x\r\nConnection: close\r\n\r\n").as_bytes()).await.unwrap();
+    let mut out = String::new();
+    s.read_to_string(&mut out).await.unwrap();
+    out
+}
+
+async fn frame_for(c: &mut Client, seq: u64) {
+    c.gaze(&Gaze { seq, t_ms: seq as f64, x: 0.3 + 0.01 * (seq % 10) as f64, y: 0.5, pupil_mm: None }).await.unwrap();
+    loop {
+        match c.next_event(WAIT).await.unwrap() {
+            Event::Frame { header, .. } => {
+                c.ack(&Ack { frame: header.frame, t_ms: None, dropped: false }).await.unwrap();
+                if header.seq == Some(seq) {
+                    return;
+                }
+            }
+            Event::Closed(reason) => panic!("closed: {reason:?}"),
+            _ => {}
+        }
+    }
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn admission_stalls_and_the_load_report() {
+    let _serial = SERIAL.lock().await;
+    let (addr, shutdown) = server(ServerOptions { max_sessions: 2, stall_timeout: Duration::from_millis(1500), ..Default::default() }).await;
+    let url = format!("ws://{addr}/ws");
+    assert!(http_get(addr, "/readyz").await.starts_with("HTTP/1.1 200"));
+
+    // Admission: two sessions fit, the third is refused with 1013 and /readyz says not ready.
+    let mut a = Client::connect(&url).await.unwrap();
+    let mut b = Client::connect(&url).await.unwrap();
+    a.hello(&small()).await.unwrap();
+    b.hello(&small()).await.unwrap();
+    let mut c = Client::connect(&url).await.unwrap();
+    match c.next_event(WAIT).await.unwrap() {
+        Event::Closed(Some((code, reason))) => assert!(code == 1013 && reason.contains("capacity"), "{code} {reason}"),
+        other => panic!("the third client got {other:?}"),
+    }
+    assert!(http_get(addr, "/readyz").await.starts_with("HTTP/1.1 503"));
+    // The admitted sessions are undisturbed.
+    frame_for(&mut a, 1).await;
+    frame_for(&mut b, 1).await;
+
+    // A stalled client (never acks) is disconnected while the other keeps getting frames.
+    // b asks for one more frame and never acknowledges it.
+    b.gaze(&Gaze { seq: 2, t_ms: 2.0, x: 0.6, y: 0.5, pupil_mm: None }).await.unwrap();
+    let mut seq = 10;
+    let closed = loop {
+        frame_for(&mut a, seq).await;
+        seq += 1;
+        match b.next_event(Duration::from_millis(100)).await {
+            Ok(Event::Closed(reason)) => break reason,
+            _ => continue,
+        }
+    };
+    let (code, reason) = closed.expect("a close frame with a reason");
+    assert!(code == 1008 && reason.contains("acknowledged"), "{code} {reason}");
+    frame_for(&mut a, seq).await;
+    drop(a);
+    tokio::time::sleep(Duration::from_millis(300)).await;
+
+    // The load tool against the same server: fields present, counts agree with /metrics.
+    let before = metric(&http_get(addr, "/metrics").await, "fovea_frames_sent_total");
+    let opts = LoadOptions { url: url.clone(), sessions: 2, duration: Duration::from_secs(3), ramp_up: Duration::from_millis(50), rate_hz: 60.0, hello: small(), seed: 3 };
+    let report = run(&opts, |_, _| {}).await;
+    let after = metric(&http_get(addr, "/metrics").await, "fovea_frames_sent_total");
+    assert_eq!(report.refused + report.connection_failures, 0);
+    assert!(report.frames > 5, "{report:?}");
+    // The last frame or two may be in flight when a session closes: sent but not received.
+    let sent = (after - before) as u64;
+    assert!(sent >= report.frames && sent <= report.frames + 2 * report.sessions as u64, "server sent {sent}, clients received {}", report.frames);
+    assert!(report.latency_ms.count > 0 && report.latency_ms.p50 > 0.0 && report.latency_ms.p99 >= report.latency_ms.p50);
+    for stage in ["queue", "render", "readback", "encode"] {
+        assert!(report.stages_ms.contains_key(stage), "{stage}");
+    }
+    assert_eq!(report.fps_per_session.len(), 2);
+    let json = serde_json::to_value(&report).unwrap();
+    for field in ["fps_total", "fairness", "latency_ms", "stages_ms", "errors", "refused", "fps_timeline"] {
+        assert!(json.get(field).is_some(), "{field}");
+    }
+    let m = http_get(addr, "/metrics").await;
+    assert!(m.contains("fovea_stage_seconds_bucket") && m.contains("fovea_sessions_refused_total"), "{m}");
+    shutdown.cancel();
+}
+
+fn metric(text: &str, name: &str) -> f64 {
+    text.lines()
+        .find(|l| l.starts_with(name) && l[name.len()..].starts_with(' '))
+        .and_then(|l| l.split_whitespace().last())
+        .and_then(|v| v.parse().ok())
+        .unwrap_or(0.0)
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn three_sessions_share_the_renderer_fairly() {
+    let _serial = SERIAL.lock().await;
+    let (addr, shutdown) = server(ServerOptions::default()).await;
+    let url = format!("ws://{addr}/ws");
+    let opts = LoadOptions { url, sessions: 3, duration: Duration::from_secs(4), ramp_up: Duration::ZERO, rate_hz: 120.0, hello: small(), seed: 9 };
+    let report = run(&opts, |_, _| {}).await;
+    assert_eq!(report.fps_per_session.len(), 3);
+    assert!(report.fps_per_session.iter().all(|f| *f > 1.0), "every session gets frames: {:?}", report.fps_per_session);
+    // One frame in the render queue per session at a time: nobody starves.
+    assert!(report.fairness > 0.6, "fps per session {:?}", report.fps_per_session);
+    shutdown.cancel();
+}
