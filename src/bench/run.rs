@@ -64,11 +64,11 @@ pub fn run(renderer: &mut Renderer, opts: &BenchOptions, stop: &AtomicBool, prog
     let mut records = Vec::new();
     let mut interrupted = false;
     let reference = Settings::preset("reference").expect("reference is a preset");
-    'groups: for (gi, (scene, (w, h), gaze0)) in groups.iter().enumerate() {
+    for (gi, (scene, (w, h), gaze0)) in groups.iter().enumerate() {
         let viewing = Viewing { width: *w, height: *h, width_cm: opts.display.width_cm, distance_cm: opts.display.distance_cm };
         let mut samples: Vec<Samples> = opts.configs.iter().map(|_| Samples::default()).collect();
         let stream_base = 1_000 * (gi as u64 + 1);
-        for f in 0..opts.warmup + opts.frames {
+        'frames: for f in 0..opts.warmup + opts.frames {
             let gaze = gaze_at(*gaze0, opts.moving, f);
             let measured = f >= opts.warmup;
             let request = |settings: &Settings, stream: u64| {
@@ -86,8 +86,9 @@ pub fn run(renderer: &mut Renderer, opts: &BenchOptions, stop: &AtomicBool, prog
             let weights = Weighting::default();
             for (ci, config) in opts.configs.iter().enumerate() {
                 if stop.load(Ordering::Relaxed) {
+                    // Keep what this group measured so far; skip the rest.
                     interrupted = true;
-                    break 'groups;
+                    break 'frames;
                 }
                 progress(done, total, &config.name);
                 let frame = renderer.render(&request(&config.settings, stream_base + ci as u64))?;
@@ -135,6 +136,9 @@ pub fn run(renderer: &mut Renderer, opts: &BenchOptions, stop: &AtomicBool, prog
                 shade_speedup_vs_full: None,
                 pareto: false,
             });
+        }
+        if interrupted {
+            break;
         }
     }
     let machine = Machine::describe(renderer);
