@@ -148,6 +148,16 @@ struct LoadArgs {
     /// Synthetic-eye seed.
     #[arg(long, default_value_t = 1)]
     seed: u32,
+    /// Drive sessions with a gaze recording instead of the synthetic eye (each session starts
+    /// at a different offset; the recording loops). Samples are sent at their recorded timing.
+    #[arg(long)]
+    recording: Option<PathBuf>,
+    /// Screen size WxH of the recording, for formats in pixels.
+    #[arg(long)]
+    screen: Option<String>,
+    /// A non-loopback host this load may target (repeatable).
+    #[arg(long)]
+    allow_host: Vec<String>,
     #[arg(long)]
     out: PathBuf,
 }
@@ -219,6 +229,9 @@ struct ReplayArgs {
     /// Output directory for frames.csv and summary.json.
     #[arg(long)]
     out: PathBuf,
+    /// A non-loopback host this replay may target (repeatable).
+    #[arg(long)]
+    allow_host: Vec<String>,
     /// Playback speed factor (2 = twice as fast).
     #[arg(long, default_value_t = 1.0)]
     speed: f64,
@@ -536,7 +549,7 @@ fn bench(a: BenchArgs) -> Result<()> {
 
 fn replay(a: ReplayArgs) -> Result<()> {
     let rec = a.recording.load()?;
-    let url = url_is_allowed(&a.url)?;
+    let url = url_is_allowed(&a.url, &a.allow_host)?;
     let opts = fovea::client::replay::ReplayOptions {
         url,
         hello: fovea::protocol::Hello { scene: a.scene.clone(), preset: a.preset.clone(), width: a.width, height: a.height, ..Default::default() },
@@ -570,7 +583,25 @@ fn replay(a: ReplayArgs) -> Result<()> {
 }
 
 fn load(a: LoadArgs) -> Result<()> {
-    let url = url_is_allowed(&a.url)?;
+    let url = url_is_allowed(&a.url, &a.allow_host)?;
+    let recording = match &a.recording {
+        Some(file) => {
+            let args = RecordingArgs {
+                file: file.clone(),
+                screen: a.screen.clone(),
+                format: None,
+                pupil_median_mm: 4.0,
+                time_col: "t_ms".into(),
+                x_col: "x".into(),
+                y_col: "y".into(),
+                pupil_col: "pupil_mm".into(),
+                time_unit: "ms".into(),
+                pixels: false,
+            };
+            Some(std::sync::Arc::new(args.load()?.samples))
+        }
+        None => None,
+    };
     let counts: Vec<usize> = match &a.sweep {
         Some(s) => s.split(',').map(|n| n.trim().parse::<usize>()).collect::<Result<_, _>>().context("--sweep: session counts like 1,2,4,8")?,
         None => vec![a.sessions],
@@ -591,6 +622,7 @@ fn load(a: LoadArgs) -> Result<()> {
             rate_hz: a.rate_hz,
             hello: fovea::protocol::Hello { scene: a.scene.clone(), preset: a.preset.clone(), width: a.width, height: a.height, ..Default::default() },
             seed: a.seed,
+            recording: recording.clone(),
         };
         let total = duration.as_secs_f64();
         let report = runtime.block_on(fovea::client::load::run(&opts, move |sessions, t| {
@@ -598,7 +630,7 @@ fn load(a: LoadArgs) -> Result<()> {
         }));
         eprintln!();
         println!(
-            "{} sessions: {} frames, {:.2} fps total, {:.2}–{:.2} fps per session (fairness {:.2}), gaze→frame p50 {:.1} p95 {:.1} p99 {:.1} max {:.1} ms; render p50 {:.1} ms; errors {}, refused {}, failed {}",
+            "{} sessions: {} frames, {:.2} fps total, {:.2}–{:.2} fps per session (fairness {:.2}), gaze→frame p50 {:.1} p95 {:.1} p99 {:.1} max {:.1} ms; render p50 {:.1} ms; samples coalesced {}; errors {}, refused {}, failed {}",
             n,
             report.frames,
             report.fps_total,
@@ -610,6 +642,7 @@ fn load(a: LoadArgs) -> Result<()> {
             report.latency_ms.p99,
             report.latency_ms.max,
             report.stages_ms.get("render").map(|p| p.p50).unwrap_or(f64::NAN),
+            report.samples_coalesced,
             report.errors,
             report.refused,
             report.connection_failures
@@ -641,13 +674,13 @@ fn load(a: LoadArgs) -> Result<()> {
     Ok(())
 }
 
-/// Replay and load generate traffic: only loopback targets are allowed.
-fn url_is_allowed(url: &str) -> Result<String> {
+/// Replay and load generate traffic: only loopback targets, or hosts named with --allow-host.
+fn url_is_allowed(url: &str, allowed: &[String]) -> Result<String> {
     let rest = url.strip_prefix("ws://").with_context(|| format!("{url:?}: expected ws://HOST:PORT/ws"))?;
-    let host = rest.split(['/', ':']).next().unwrap_or("");
+    let host = if rest.starts_with('[') { rest.split(']').next().map(|h| format!("{h}]")).unwrap_or_default() } else { rest.split(['/', ':']).next().unwrap_or("").to_string() };
     let loopback = host == "localhost" || host == "[::1]" || host.parse::<std::net::Ipv4Addr>().is_ok_and(|ip| ip.is_loopback());
-    if !loopback {
-        bail!("{url:?}: only loopback servers (127.0.0.0/8, localhost, [::1]) may be targeted");
+    if !loopback && !allowed.iter().any(|a| *a == host) {
+        bail!("{url:?}: only loopback servers (127.0.0.0/8, localhost, [::1]) or hosts given with --allow-host may be targeted");
     }
     Ok(url.to_string())
 }

@@ -96,7 +96,7 @@ async fn admission_stalls_and_the_load_report() {
 
     // The load tool against the same server: fields present, counts agree with /metrics.
     let before = metric(&http_get(addr, "/metrics").await, "fovea_frames_sent_total");
-    let opts = LoadOptions { url: url.clone(), sessions: 2, duration: Duration::from_secs(3), ramp_up: Duration::from_millis(50), rate_hz: 60.0, hello: small(), seed: 3 };
+    let opts = LoadOptions { url: url.clone(), sessions: 2, duration: Duration::from_secs(3), ramp_up: Duration::from_millis(50), rate_hz: 60.0, hello: small(), seed: 3, recording: None };
     let report = run(&opts, |_, _| {}).await;
     let after = metric(&http_get(addr, "/metrics").await, "fovea_frames_sent_total");
     assert_eq!(report.refused + report.connection_failures, 0);
@@ -118,6 +118,29 @@ async fn admission_stalls_and_the_load_report() {
     shutdown.cancel();
 }
 
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn load_can_be_driven_by_a_gaze_recording() {
+    let _serial = SERIAL.lock().await;
+    let (addr, shutdown) = server(ServerOptions::default()).await;
+    let text = include_str!("../assets/gaze/eyelink_500hz_1920x1200.csv");
+    let rec = fovea::gaze::formats::parse(text, &fovea::gaze::formats::ParseOptions { screen: Some((1920, 1200)), ..Default::default() }).unwrap();
+    let opts = LoadOptions {
+        url: format!("ws://{addr}/ws"),
+        sessions: 2,
+        duration: Duration::from_secs(2),
+        ramp_up: Duration::ZERO,
+        rate_hz: 60.0,
+        hello: small(),
+        seed: 1,
+        recording: Some(std::sync::Arc::new(rec.samples)),
+    };
+    let report = run(&opts, |_, _| {}).await;
+    // 500 Hz for ~2 s per session, minus blinks and track loss.
+    assert!(report.gaze_sent > 1000, "{} samples sent", report.gaze_sent);
+    assert!(report.frames > 4 && report.samples_coalesced > 0, "{report:?}");
+    shutdown.cancel();
+}
+
 fn metric(text: &str, name: &str) -> f64 {
     text.lines()
         .find(|l| l.starts_with(name) && l[name.len()..].starts_with(' '))
@@ -131,7 +154,7 @@ async fn three_sessions_share_the_renderer_fairly() {
     let _serial = SERIAL.lock().await;
     let (addr, shutdown) = server(ServerOptions::default()).await;
     let url = format!("ws://{addr}/ws");
-    let opts = LoadOptions { url, sessions: 3, duration: Duration::from_secs(4), ramp_up: Duration::ZERO, rate_hz: 120.0, hello: small(), seed: 9 };
+    let opts = LoadOptions { url, sessions: 3, duration: Duration::from_secs(4), ramp_up: Duration::ZERO, rate_hz: 120.0, hello: small(), seed: 9, recording: None };
     let report = run(&opts, |_, _| {}).await;
     assert_eq!(report.fps_per_session.len(), 3);
     assert!(report.fps_per_session.iter().all(|f| *f > 1.0), "every session gets frames: {:?}", report.fps_per_session);

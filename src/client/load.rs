@@ -27,6 +27,9 @@ pub struct LoadOptions {
     pub rate_hz: f64,
     pub hello: Hello,
     pub seed: u32,
+    /// Drive sessions with this recording (looped, each session from a different offset)
+    /// instead of the synthetic eye.
+    pub recording: Option<std::sync::Arc<Vec<crate::gaze::Sample>>>,
 }
 
 #[derive(Debug, Clone, Copy, Serialize, PartialEq)]
@@ -68,6 +71,9 @@ pub struct LoadReport {
     /// Server stages from the frame headers, and the CDF points for plotting.
     pub stages_ms: BTreeMap<String, Percentiles>,
     pub gaze_sent: u64,
+    /// Samples answered by no frame: coalesced into newer ones while frames were made (each is
+    /// a frame the client would have wanted and the server skipped).
+    pub samples_coalesced: u64,
     pub errors: u64,
     pub connection_failures: u64,
     /// Sessions the server refused (close 1013).
@@ -81,6 +87,7 @@ pub struct LoadReport {
 #[derive(Default)]
 struct SessionResult {
     frames: u64,
+    answered: u64,
     active_s: f64,
     gaze_sent: u64,
     errors: u64,
@@ -133,6 +140,7 @@ pub async fn run(opts: &LoadOptions, progress: impl Fn(usize, f64) + Send + Sync
         latency_ms: percentiles(&hists["latency"]),
         stages_ms: hists.iter().filter(|(k, _)| k.as_str() != "latency").map(|(k, h)| (k.clone(), percentiles(h))).collect(),
         gaze_sent: results.iter().map(|r| r.gaze_sent).sum(),
+        samples_coalesced: results.iter().map(|r| r.gaze_sent.saturating_sub(r.answered)).sum(),
         errors: results.iter().map(|r| r.errors).sum(),
         connection_failures: results.iter().filter(|r| r.connect_failed).count() as u64,
         refused: results.iter().filter(|r| r.refused).count() as u64,
@@ -197,7 +205,7 @@ async fn session(
     let reader = {
         let (sent_at, acks, hists, timeline) = (sent_at.clone(), out_tx.clone(), hists.clone(), timeline.clone());
         tokio::spawn(async move {
-            let (mut frames, mut errors) = (0u64, 0u64);
+            let (mut frames, mut errors, mut answered) = (0u64, 0u64, 0u64);
             while let Some(Ok(msg)) = stream.next().await {
                 match msg {
                     Message::Binary(bytes) => {
@@ -205,6 +213,7 @@ async fn session(
                         let Ok((h, _)) = decode_frame(&bytes) else { continue };
                         let _ = acks.send(Some(format!(r#"{{"type":"ack","frame":{}}}"#, h.frame)));
                         frames += 1;
+                        answered += u64::from(h.seq.is_some());
                         if let Ok(mut t) = timeline.lock() {
                             let s = started.elapsed().as_secs() as usize;
                             if let Some(slot) = t.get_mut(s) {
@@ -232,7 +241,7 @@ async fn session(
                     _ => {}
                 }
             }
-            (frames, errors)
+            (frames, errors, answered)
         })
     };
     let viewing = Viewing { width: opts.hello.width, height: opts.hello.height, width_cm: opts.hello.display.width_cm, distance_cm: opts.hello.display.distance_cm };
@@ -240,12 +249,37 @@ async fn session(
     let period = Duration::from_secs_f64(1.0 / opts.rate_hz.clamp(1.0, 10_000.0));
     let mut tick = tokio::time::interval(period);
     let mut seq = 0u64;
+    // With a recording: loop it, each session starting a different share of the way in.
+    let recording = opts.recording.as_ref().filter(|r| r.len() > 1);
+    let span = recording.and_then(|r| r.last().map(|l| l.t_ms + 1.0)).unwrap_or(1.0);
+    let offset = span * index as f64 / opts.sessions.max(1) as f64;
+    let mut cursor = 0usize;
     while Instant::now() < deadline {
-        tick.tick().await;
         let t = session_start.elapsed().as_secs_f64() * 1e3;
-        let (deg, pupil) = eye.step(t);
-        let Some(deg) = deg else { continue };
-        let [x, y] = degrees_to_frame(&viewing, deg).map(|v| v.clamp(0.0, 1.0));
+        let (xy, pupil) = match recording {
+            Some(r) => {
+                // The next sample at its recorded time (relative to this session's offset).
+                let at = (offset + t) % span;
+                if cursor >= r.len() || r[cursor].t_ms > at + 1.0 {
+                    cursor = r.partition_point(|s| s.t_ms < at);
+                }
+                let Some(s) = r.get(cursor) else {
+                    cursor = 0;
+                    continue;
+                };
+                let wait = (s.t_ms - at).max(0.0);
+                tokio::time::sleep(Duration::from_secs_f64(wait / 1000.0)).await;
+                cursor += 1;
+                (crate::gaze::sendable(s), s.pupil_mm)
+            }
+            None => {
+                tick.tick().await;
+                let (deg, pupil) = eye.step(t);
+                (deg.map(|d| degrees_to_frame(&viewing, d).map(|v| v.clamp(0.0, 1.0))), pupil)
+            }
+        };
+        let Some([x, y]) = xy else { continue };
+        let t = session_start.elapsed().as_secs_f64() * 1e3;
         seq += 1;
         if let Ok(mut m) = sent_at.lock() {
             m.insert(seq, t);
@@ -261,9 +295,10 @@ async fn session(
     }
     let _ = out_tx.send(None);
     let _ = writer.await;
-    if let Ok(Ok((frames, errors))) = tokio::time::timeout(Duration::from_secs(10), reader).await {
+    if let Ok(Ok((frames, errors, answered))) = tokio::time::timeout(Duration::from_secs(10), reader).await {
         result.frames = frames;
         result.errors += errors;
+        result.answered = answered;
     }
     result.active_s = session_start.elapsed().as_secs_f64().min(deadline.saturating_duration_since(session_start).as_secs_f64().max(1e-3));
     result

@@ -1,7 +1,8 @@
 //! Prometheus metrics (the `metrics` facade with its Prometheus exporter, installed once per
 //! process). Names: `fovea_sessions_active`, `fovea_sessions_total`,
-//! `fovea_sessions_refused_total`, `fovea_sessions_stalled_total`, `fovea_frames_sent_total`,
-//! `fovea_frames_failed_total`, `fovea_gaze_samples_total`, `fovea_gaze_coalesced_total`,
+//! `fovea_sessions_refused_total`, `fovea_sessions_stalled_total`, `fovea_frames_rendered_total`,
+//! `fovea_frames_sent_total`, `fovea_frames_failed_total`, `fovea_frames_skipped_total` (a sample
+//! arrived while the client had no credit), `fovea_gaze_samples_total`, `fovea_gaze_coalesced_total`,
 //! `fovea_errors_total{code}`, and `fovea_stage_seconds{stage}` histograms for queue, render,
 //! readback, encode and send.
 

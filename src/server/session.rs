@@ -150,7 +150,8 @@ pub async fn run(socket: WebSocket, state: Arc<ServerState>, id: u64) {
             let frame = matches!(reply, Message::Binary(_));
             let started = Instant::now();
             // A client that stops reading fills its socket; it may not hold the session forever.
-            let sent_ok = matches!(tokio::time::timeout(state.stall_timeout, tx.send(reply)).await, Ok(Ok(())));
+            let send = tokio::time::timeout(state.stall_timeout, tx.send(reply));
+            let sent_ok = matches!(tracing::Instrument::instrument(send, tracing::debug_span!("send", session = id, frame)).await, Ok(Ok(())));
             if frame && sent_ok {
                 ::metrics::counter!("fovea_frames_sent_total").increment(1);
                 super::metrics::stage("send", started.elapsed().as_secs_f64() * 1e3);
@@ -198,6 +199,11 @@ impl Session {
                 if self.latest.is_some() {
                     self.coalesced += 1;
                     ::metrics::counter!("fovea_gaze_coalesced_total").increment(1);
+                    let max = self.hello.as_ref().map(|h| h.max_in_flight as usize).unwrap_or(0);
+                    if self.unacked.len() >= max {
+                        // The client has no credit: this sample's frame is skipped, not queued.
+                        ::metrics::counter!("fovea_frames_skipped_total").increment(1);
+                    }
                 }
                 self.latest = Some((gaze, Instant::now()));
                 if gaze.pupil_mm.is_some() {
@@ -349,6 +355,7 @@ async fn make_frame(state: Arc<ServerState>, job: FrameJob) -> Result<(Vec<u8>, 
     };
     let before_queue = Instant::now();
     let rendered = state.render.render(job.request.clone()).await.map_err(|e| failed("render", &e))?;
+    ::metrics::counter!("fovea_frames_rendered_total").increment(1);
     let queue = (before_queue - job.arrived).as_secs_f64() * 1e3 + rendered.queue_ms;
     let frame = rendered.frame;
     let (codec, quality) = (job.hello.codec, job.hello.quality);
@@ -356,7 +363,9 @@ async fn make_frame(state: Arc<ServerState>, job: FrameJob) -> Result<(Vec<u8>, 
     let (render_ms, readback_ms, sampled) = (frame.render_ms, frame.readback_ms, frame.sampled);
     let passes_ms = frame.passes_ms;
     let rgba = frame.rgba;
+    let frame_no = job.frame;
     let encoded = tokio::task::spawn_blocking(move || {
+        let _span = tracing::debug_span!("encode", frame = frame_no).entered();
         let started = Instant::now();
         encode::encode(&rgba, w, h, codec, quality).map(|bytes| (bytes, started.elapsed()))
     })
