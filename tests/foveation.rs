@@ -298,3 +298,58 @@ fn saliency_in_the_sampling_map_matches_the_cpu_twin() {
     }
     assert!(salient > 50, "silhouettes and creases are salient: {salient} pixels");
 }
+
+#[test]
+fn depth_of_field_lowers_the_sampling_map_as_the_cpu_model_says() {
+    use fovea::optics::acuity::{blur_angle_rad, dof_factor};
+    let mut r = renderer();
+    let (w, h) = (160, 120);
+    let gaze = [0.5f32, 0.55f32];
+    let scene = Scene::builtin("bunny").unwrap();
+    let mut out_of_focus = Vec::new();
+    for pupil in [2.0f32, 8.0] {
+        let mut req = foveated("balanced", w, h, gaze);
+        req.stream = 40 + pupil as u64;
+        req.pupil_mm = pupil;
+        req.settings.dof = true;
+        let f = &mut req.settings.foveation;
+        f.saliency = false;
+        f.motion = false;
+        f.min_probability = 0.0;
+        let f = req.settings.foveation;
+        r.render(&req).unwrap();
+        let img = inspect(&r, &req);
+        let v = Viewing { width: w, height: h, width_cm: req.display.width_cm, distance_cm: req.display.distance_cm };
+        let g = [f64::from(gaze[0]) * f64::from(w), f64::from(gaze[1]) * f64::from(h)];
+        let (slope, w0) = (f64::from(f.mar_slope), f64::from(f.mar_w0_deg));
+        let (w_min, w_far) = (v.pixel_angle_deg(), mar_deg(v.max_eccentricity_deg(g), slope, w0));
+        // Focus: the distance under the gaze pixel; metres per unit and radians per pixel as the renderer sets them.
+        let gk = (g[1].floor() as u32 * w + g[0].floor() as u32) as usize;
+        let under_gaze = f64::from(img.normal_distance[gk][3]);
+        // Off the object the eye focuses at the camera's target distance (as the shader does).
+        let cam = scene.file.camera;
+        let target = glam::Vec3::from(cam.target).distance(glam::Vec3::from(cam.eye)) as f64;
+        let focus_m = if under_gaze > 0.0 { under_gaze } else { target } * scene.metres_per_unit();
+        assert!(under_gaze > 0.0, "the gaze is on the bunny");
+        let rad_per_px = f64::from(scene.file.camera.fov_y_deg).to_radians() / f64::from(h);
+        let (mut checked, mut lowered) = (0, 0);
+        for k in 0..(w * h) as usize {
+            if img.flags[k] & FLAG_COVERED == 0 {
+                continue;
+            }
+            let px = [(k as u32 % w) as f64 + 0.5, (k as u32 / w) as f64 + 0.5];
+            let p = acuity_probability(f.probability, mar_deg(v.eccentricity_deg(g, px), slope, w0), w_min, w_far);
+            let d_m = f64::from(img.normal_distance[k][3]) * scene.metres_per_unit();
+            let blur_px = blur_angle_rad(f64::from(pupil), focus_m, d_m) / rad_per_px;
+            let expected = (p * dof_factor(blur_px)).max(f64::from(fovea::render::MIN_XI));
+            let gpu = f64::from(img.probability[k]);
+            assert!((gpu - expected).abs() < 1e-3 + 2e-3 * expected, "pupil {pupil} pixel {k}: GPU {gpu}, CPU {expected}");
+            checked += 1;
+            lowered += usize::from(dof_factor(blur_px) < 1.0);
+        }
+        assert!(checked > 2000);
+        out_of_focus.push(lowered);
+    }
+    // A wider pupil narrows the in-focus band: more pixels are blurred and sampled less.
+    assert!(out_of_focus[1] > 100 && out_of_focus[1] > out_of_focus[0], "out of focus at 2 and 8 mm: {out_of_focus:?}");
+}
