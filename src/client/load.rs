@@ -192,15 +192,7 @@ async fn session(
         }
     }
     let session_start = Instant::now();
-    let (out_tx, mut out_rx) = tokio::sync::mpsc::unbounded_channel::<Option<String>>();
-    let writer = tokio::spawn(async move {
-        while let Some(Some(text)) = out_rx.recv().await {
-            if sink.send(Message::Text(text.into())).await.is_err() {
-                break;
-            }
-        }
-        let _ = sink.close().await;
-    });
+    let (out_tx, writer) = super::spawn_writer(sink);
     let sent_at: Arc<Mutex<BTreeMap<u64, f64>>> = Arc::new(Mutex::new(BTreeMap::new()));
     let reader = {
         let (sent_at, acks, hists, timeline) = (sent_at.clone(), out_tx.clone(), hists.clone(), timeline.clone());

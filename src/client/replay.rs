@@ -138,17 +138,7 @@ pub async fn replay(samples: &[Sample], opts: &ReplayOptions, mut progress: impl
             None => return Err(ClientError::Closed),
         }
     }
-    // Every outgoing message goes through one writer task; `None` closes the socket (the
-    // reader holds a sender for its acks, so the channel itself never closes first).
-    let (out_tx, mut out_rx) = tokio::sync::mpsc::unbounded_channel::<Option<String>>();
-    let writer = tokio::spawn(async move {
-        while let Some(Some(text)) = out_rx.recv().await {
-            if sink.send(Message::Text(text.into())).await.is_err() {
-                break;
-            }
-        }
-        let _ = sink.close().await;
-    });
+    let (out_tx, writer) = super::spawn_writer(sink);
     let clock = Instant::now();
     // Send time (ms since start) of each seq; seq = position in the plan + 1.
     let sent_at: Arc<Mutex<Vec<Option<f64>>>> = Arc::new(Mutex::new(vec![None; plan.len() + 1]));
