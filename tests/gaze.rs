@@ -75,10 +75,17 @@ async fn a_recorded_session_replays_to_the_same_frames() {
     let got: Vec<[f64; 2]> = recorded.samples.iter().filter_map(|s| s.xy).collect();
     assert_eq!(got, sent, "every sent sample was recorded, exactly");
     let (second, _) = replay(&recorded.samples, &slow, |_, _| {}).await.unwrap();
-    let gazes = |f: &[fovea::client::replay::FrameRecord]| -> Vec<(f64, f64)> { f.iter().filter(|f| f.seq.is_some()).map(|f| (f.gaze_x, f.gaze_y)).collect() };
+    // A frame answering sample k shows the same gaze in both runs. (Which samples get their
+    // own frame depends on timing: a slow first frame, while shaders compile, coalesces a few.)
+    let gazes = |f: &[fovea::client::replay::FrameRecord]| -> std::collections::BTreeMap<u64, (f64, f64)> {
+        f.iter().filter_map(|f| Some((f.seq?, (f.gaze_x, f.gaze_y)))).collect()
+    };
     let (a, b) = (gazes(&first), gazes(&second));
-    // At half speed every sample gets its own frame, so both runs show the same gazes.
-    assert!(a.len() > 20 && a == b, "{} vs {} frames", a.len(), b.len());
+    let common: Vec<u64> = a.keys().filter(|k| b.contains_key(k)).copied().collect();
+    assert!(common.len() > 20, "{} frames in common ({} and {})", common.len(), a.len(), b.len());
+    for k in common {
+        assert_eq!(a[&k], b[&k], "sample {k}");
+    }
     shutdown.cancel();
     let _ = std::fs::remove_dir_all(&dir);
 }
