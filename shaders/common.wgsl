@@ -154,6 +154,37 @@ fn seed_dist2(s: u32, p: vec2<i32>) -> i32 {
     return d.x * d.x + d.y * d.y;
 }
 
+// The mesh vertex both raster passes read (src/render/pass/gbuffer.rs VERTEX_LAYOUT).
+struct VertexIn {
+    @location(0) position: vec3<f32>,
+    @location(1) normal: vec3<f32>,
+    @location(2) blurred_normal: vec3<f32>,
+    @location(3) material: u32,
+}
+
+// The light-space photon pass's uniforms (src/render/pass/photons.rs PhotonUniform).
+struct Photons {
+    light_view_proj: mat4x4<f32>,
+    // xyz: unit vector towards the light.
+    to_light: vec4<f32>,
+    // rgb: light colour × intensity.
+    light: vec4<f32>,
+    // x: map side N; y: area one texel covers perpendicular to the light (mm²);
+    // z: texel size (scene units); w: pyramid level being built (reduce entry point).
+    params: vec4<f32>,
+}
+
+// Depth under the gaze, from the G-buffer's normal + distance: what the eye focuses on. Off the
+// object, the camera's target distance.
+fn focus_distance(normal_distance: texture_2d<f32>) -> f32 {
+    let g = clamp(vec2<i32>(floor(frame.gaze.xy)), vec2<i32>(0), frame_size() - 1);
+    let d = textureLoad(normal_distance, g, 0).w;
+    if (d > 0.0) {
+        return d;
+    }
+    return frame.gaze.w;
+}
+
 // Material id stored in the G-buffer albedo alpha ((id + 1)/255; 0 = background).
 fn material_id(albedo_alpha: f32) -> u32 {
     return u32(round(albedo_alpha * 255.0)) - 1u;

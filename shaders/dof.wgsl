@@ -15,19 +15,9 @@ fn blur_radius_px(p: vec2<i32>) -> f32 {
         return 0.0;
     }
     let metres = frame.eye.w;
-    let focus = max(focus_distance() * metres, 1e-3);
+    let focus = max(focus_distance(normal_distance) * metres, 1e-3);
     let beta = frame.gaze.z * 1e-3 * abs(1.0 / focus - 1.0 / max(d * metres, 1e-3));
     return min(0.5 * beta / frame.temporal.z, MAX_RADIUS_PX);
-}
-
-// Depth under the gaze: what the eye focuses on. Off the object, the camera's target distance.
-fn focus_distance() -> f32 {
-    let g = clamp(vec2<i32>(floor(frame.gaze.xy)), vec2<i32>(0), frame_size() - 1);
-    let d = textureLoad(normal_distance, g, 0).w;
-    if (d > 0.0) {
-        return d;
-    }
-    return frame.gaze.w;
 }
 
 @compute @workgroup_size(8, 8)

@@ -3,13 +3,6 @@
 
 @group(0) @binding(1) var<storage, read> materials: array<Material>;
 
-struct VertexIn {
-    @location(0) position: vec3<f32>,
-    @location(1) normal: vec3<f32>,
-    @location(2) blurred_normal: vec3<f32>,
-    @location(3) material: u32,
-}
-
 struct VertexOut {
     @builtin(position) clip: vec4<f32>,
     @location(0) world: vec3<f32>,

@@ -2,28 +2,10 @@
 // the light, orthographically. Each texel is one photon: where the light enters the surface.
 // Other materials are not drawn (they neither carry photons nor shadow them).
 
-struct Photons {
-    light_view_proj: mat4x4<f32>,
-    // xyz: unit vector towards the light.
-    to_light: vec4<f32>,
-    // rgb: light colour × intensity.
-    light: vec4<f32>,
-    // x: map side N; y: area one texel covers perpendicular to the light (mm²);
-    // z: texel size (scene units); w: pyramid level being built (reduce entry point).
-    params: vec4<f32>,
-}
-
 // Binding 0 is the shared prelude's frame uniform, unused here: the photon map does not depend
 // on the camera.
 @group(0) @binding(1) var<uniform> photons: Photons;
 @group(0) @binding(2) var<storage, read> materials: array<Material>;
-
-struct VertexIn {
-    @location(0) position: vec3<f32>,
-    @location(1) normal: vec3<f32>,
-    @location(2) blurred_normal: vec3<f32>,
-    @location(3) material: u32,
-}
 
 struct VertexOut {
     @builtin(position) clip: vec4<f32>,

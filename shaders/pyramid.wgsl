@@ -4,13 +4,6 @@
 // level sums four children's flux, places the node at their flux-weighted mean position, and
 // records its extent: the radius around that point containing the children's extents.
 
-struct Photons {
-    light_view_proj: mat4x4<f32>,
-    to_light: vec4<f32>,
-    light: vec4<f32>,
-    params: vec4<f32>,
-}
-
 // Binding 0 is the shared prelude's frame uniform, unused here.
 // x: level being built; y: its side; z: offset of its first node; w: offset of the level below.
 @group(0) @binding(1) var<uniform> level: vec4<u32>;

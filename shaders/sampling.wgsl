@@ -135,16 +135,6 @@ fn white_noise(p: vec2<u32>) -> f32 {
     return f32(h >> 8u) / 16777216.0;
 }
 
-// Depth under the gaze: what the eye focuses on. Off the object, the camera's target distance.
-fn focus_distance() -> f32 {
-    let g = clamp(vec2<i32>(floor(frame.gaze.xy)), vec2<i32>(0), frame_size() - 1);
-    let d = textureLoad(normal_distance, g, 0).w;
-    if (d > 0.0) {
-        return d;
-    }
-    return frame.gaze.w;
-}
-
 @compute @workgroup_size(8, 8)
 fn main(
     @builtin(global_invocation_id) id: vec3<u32>,
@@ -192,7 +182,7 @@ fn main(
     if (has_mode(MODE_DOF)) {
         // β ≈ A·|1/d_focus − 1/d|; a blur b pixels wide needs a sample every b pixels.
         let metres = frame.eye.w;
-        let focus = max(focus_distance() * metres, 1e-3);
+        let focus = max(focus_distance(normal_distance) * metres, 1e-3);
         let d = max(nd.w * metres, 1e-3);
         let blur_px = frame.gaze.z * 1e-3 * abs(1.0 / focus - 1.0 / d) / frame.temporal.z;
         if (blur_px > 1.0) {

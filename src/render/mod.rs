@@ -18,7 +18,7 @@ pub mod timer;
 pub mod uniforms;
 
 pub use device::Gpu;
-pub use renderer::{f16_to_f32, FrameRequest, Inspection, RenderedFrame, Renderer, DEFAULT_PUPIL_MM, MIN_XI};
+pub use renderer::{FrameRequest, Inspection, RenderedFrame, Renderer, DEFAULT_PUPIL_MM, MIN_XI};
 pub use thread::{RenderHandle, RenderThread, Rendered};
 
 #[derive(Debug, thiserror::Error)]

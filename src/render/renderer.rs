@@ -1,7 +1,7 @@
 use std::collections::HashMap;
 use std::time::Instant;
 
-use glam::{Mat4, Vec3};
+use glam::Vec3;
 
 use super::gpu::{self, FramePass};
 use super::pass::compact::CompactPass;
@@ -522,18 +522,3 @@ fn read_texture(gpu: &Gpu, texture: &wgpu::Texture, bytes_per_pixel: u32) -> Res
     })
 }
 
-/// IEEE half → single precision (the GPU's rgba16float history and colour textures).
-pub fn f16_to_f32(h: u16) -> f32 {
-    let sign = if h & 0x8000 != 0 { -1.0 } else { 1.0 };
-    let exp = i32::from((h >> 10) & 0x1F);
-    let frac = f32::from(h & 0x3FF);
-    match exp {
-        0 => sign * frac * 2f32.powi(-24),
-        31 if frac == 0.0 => sign * f32::INFINITY,
-        31 => f32::NAN,
-        _ => sign * (1.0 + frac / 1024.0) * 2f32.powi(exp - 15),
-    }
-}
-
-#[allow(dead_code)]
-fn _assert_mat(_: Mat4) {}
