@@ -1,0 +1,129 @@
+//! `fovea bench`: the speed/accuracy sweep's command line, progress bar and Ctrl-C.
+
+use std::path::PathBuf;
+
+use anyhow::{Context, Result};
+
+use super::parse::{parse_gaze, parse_size};
+use fovea::render::Renderer;
+
+#[derive(clap::Args)]
+pub struct BenchArgs {
+    /// Scenes, comma-separated.
+    #[arg(long, default_value = fovea::scene::DEFAULT_SCENE)]
+    pub scene: String,
+    #[arg(long, default_value_t = 640)]
+    pub width: u32,
+    #[arg(long, default_value_t = 480)]
+    pub height: u32,
+    /// More frame sizes as WxH, comma-separated (in addition to --width/--height).
+    #[arg(long)]
+    pub sizes: Option<String>,
+    /// Gaze points X,Y separated by ';' (default: centre and near a corner).
+    #[arg(long, default_value = "0.5,0.5;0.1,0.1")]
+    pub gaze: String,
+    /// Move the gaze slowly around each point (smooth pursuit), so temporal reuse is exercised.
+    #[arg(long)]
+    pub moving: bool,
+    /// Configurations: presets, rungs, knobs, or a comma-separated list of names from knobs.
+    #[arg(long, default_value = "knobs")]
+    pub sweep: String,
+    /// Unmeasured frames per configuration and gaze before measuring.
+    #[arg(long, default_value_t = 3)]
+    pub warmup: u32,
+    /// Measured frames per configuration and gaze.
+    #[arg(long, default_value_t = 10, value_parser = clap::value_parser!(u32).range(1..=100000))]
+    pub frames: u32,
+    /// Pupil diameter, mm.
+    #[arg(long, default_value_t = fovea::render::DEFAULT_PUPIL_MM)]
+    pub pupil_mm: f32,
+    #[arg(long, default_value_t = 53.0)]
+    pub display_width_cm: f64,
+    #[arg(long, default_value_t = 60.0)]
+    pub distance_cm: f64,
+    /// Output directory for bench.json, bench.md and bench.svg.
+    #[arg(long)]
+    pub out: PathBuf,
+}
+
+pub fn bench(a: BenchArgs) -> Result<()> {
+    use std::sync::atomic::{AtomicBool, Ordering};
+    use std::sync::Arc;
+    let configs = fovea::bench::sweep(&a.sweep).map_err(anyhow::Error::msg)?;
+    let mut sizes = vec![parse_size(&format!("{}x{}", a.width, a.height))?];
+    if let Some(more) = &a.sizes {
+        for s in more.split(',') {
+            sizes.push(parse_size(s)?);
+        }
+    }
+    let gazes = a
+        .gaze
+        .split(';')
+        .map(parse_gaze)
+        .collect::<Result<Vec<_>, _>>()
+        .map_err(anyhow::Error::msg)?;
+    let scenes: Vec<String> = a.scene.split(',').map(|s| s.trim().to_string()).collect();
+    for s in &scenes {
+        fovea::scene::Scene::builtin(s)?;
+    }
+    let opts = fovea::bench::BenchOptions {
+        scenes,
+        sizes,
+        gazes,
+        moving: a.moving,
+        warmup: a.warmup,
+        frames: a.frames,
+        configs,
+        display: fovea::protocol::Display {
+            width_cm: a.display_width_cm,
+            distance_cm: a.distance_cm,
+        },
+        pupil_mm: a.pupil_mm,
+    };
+    let stop = Arc::new(AtomicBool::new(false));
+    let flag = stop.clone();
+    ctrlc::set_handler(move || {
+        eprintln!("\nstopping after this frame; writing the results so far");
+        flag.store(true, Ordering::Relaxed);
+    })
+    .context("installing the Ctrl-C handler")?;
+    let mut renderer = Renderer::new().context("opening the GPU")?;
+    eprintln!("adapter: {}", renderer.adapter());
+    let started = std::time::Instant::now();
+    let mut last_draw = std::time::Instant::now() - std::time::Duration::from_secs(1);
+    let mut progress = |done: usize, total: usize, what: &str| {
+        if last_draw.elapsed().as_millis() < 200 && done < total {
+            return;
+        }
+        last_draw = std::time::Instant::now();
+        let frac = done as f64 / total.max(1) as f64;
+        let eta = if frac > 0.0 {
+            started.elapsed().as_secs_f64() * (1.0 - frac) / frac
+        } else {
+            0.0
+        };
+        let bar: String = (0..30)
+            .map(|i| if (i as f64) < frac * 30.0 { '#' } else { '-' })
+            .collect();
+        eprint!(
+            "\r[{bar}] {done}/{total} ({:.0}%) ETA {:.0}s  {what:<28}",
+            frac * 100.0,
+            eta
+        );
+    };
+    let report = fovea::bench::run(&mut renderer, &opts, &stop, &mut progress)?;
+    eprintln!();
+    fovea::bench::write_reports(&report, &a.out)
+        .with_context(|| format!("writing reports to {}", a.out.display()))?;
+    println!("{}", report.markdown());
+    eprintln!(
+        "wrote {}/bench.json, bench.md, bench.svg{}",
+        a.out.display(),
+        if report.interrupted {
+            " (interrupted)"
+        } else {
+            ""
+        }
+    );
+    Ok(())
+}

@@ -1,0 +1,204 @@
+//! `fovea replay` and `fovea gaze`: recordings in, frames or prediction errors out.
+
+use std::path::PathBuf;
+
+use anyhow::{Context, Result};
+
+use super::parse::{parse_enum, parse_size, url_is_allowed};
+
+#[derive(clap::Args)]
+pub struct RecordingArgs {
+    /// The recording.
+    pub file: PathBuf,
+    /// Screen size WxH in pixels, for formats in pixels (EyeLink, Neon, generic --pixels).
+    #[arg(long)]
+    pub screen: Option<String>,
+    /// eyelink, pupil_core, pupil_neon, tobii or generic (default: from the header).
+    #[arg(long, value_parser = parse_enum::<fovea::gaze::formats::Format>)]
+    pub format: Option<fovea::gaze::formats::Format>,
+    /// EyeLink pupil areas are scaled so the recording's median pupil is this diameter, mm.
+    #[arg(long, default_value_t = 4.0)]
+    pub pupil_median_mm: f64,
+    /// Generic CSV: column names and time unit (s, ms, us, ns); --pixels for pixel coordinates.
+    #[arg(long, default_value = "t_ms")]
+    pub time_col: String,
+    #[arg(long, default_value = "x")]
+    pub x_col: String,
+    #[arg(long, default_value = "y")]
+    pub y_col: String,
+    #[arg(long, default_value = "pupil_mm")]
+    pub pupil_col: String,
+    #[arg(long, default_value = "ms")]
+    pub time_unit: String,
+    #[arg(long)]
+    pub pixels: bool,
+}
+
+impl RecordingArgs {
+    pub fn load(&self) -> Result<fovea::gaze::formats::Recording> {
+        let text = std::fs::read_to_string(&self.file)
+            .with_context(|| format!("reading {}", self.file.display()))?;
+        let screen = self.screen.as_deref().map(parse_size).transpose()?;
+        let opts = fovea::gaze::formats::ParseOptions {
+            format: self.format,
+            screen,
+            columns: fovea::gaze::formats::Columns {
+                time: self.time_col.clone(),
+                x: self.x_col.clone(),
+                y: self.y_col.clone(),
+                pupil: Some(self.pupil_col.clone()),
+                time_unit: self.time_unit.clone(),
+                pixels: self.pixels,
+            },
+            pupil_median_mm: self.pupil_median_mm,
+            ..Default::default()
+        };
+        let rec = fovea::gaze::formats::parse(&text, &opts)
+            .with_context(|| format!("parsing {}", self.file.display()))?;
+        let lost = rec.samples.iter().filter(|s| s.xy.is_none()).count();
+        let span = rec.samples.last().map(|s| s.t_ms / 1e3).unwrap_or(0.0);
+        eprintln!(
+            "{}: {:?}, {} samples over {span:.1} s, {lost} without gaze (track loss or blink)",
+            self.file.display(),
+            rec.format,
+            rec.samples.len()
+        );
+        if let Some(rule) = &rec.pupil_rule {
+            eprintln!("pupil: {rule}");
+        }
+        Ok(rec)
+    }
+}
+
+#[derive(clap::Args)]
+pub struct ReplayArgs {
+    #[command(flatten)]
+    pub recording: RecordingArgs,
+    /// Server WebSocket URL.
+    #[arg(long, default_value = "ws://127.0.0.1:8080/ws")]
+    pub url: String,
+    /// Output directory for frames.csv and summary.json.
+    #[arg(long)]
+    pub out: PathBuf,
+    /// A non-loopback host this replay may target (repeatable).
+    #[arg(long)]
+    pub allow_host: Vec<String>,
+    /// Playback speed factor (2 = twice as fast).
+    #[arg(long, default_value_t = 1.0)]
+    pub speed: f64,
+    /// Start this many seconds into the recording.
+    #[arg(long, default_value_t = 0.0)]
+    pub start_s: f64,
+    /// Play only this many seconds of it.
+    #[arg(long)]
+    pub duration_s: Option<f64>,
+    /// Play the selection this many times.
+    #[arg(long = "loop", default_value_t = 1)]
+    pub loops: u32,
+    #[arg(long, default_value = fovea::scene::DEFAULT_SCENE)]
+    pub scene: String,
+    #[arg(long, default_value = "balanced")]
+    pub preset: String,
+    #[arg(long, default_value_t = 640)]
+    pub width: u32,
+    #[arg(long, default_value_t = 480)]
+    pub height: u32,
+    /// Save every received frame as DIR/frames/NNNNNN.jpg.
+    #[arg(long)]
+    pub save_frames: bool,
+}
+
+#[derive(clap::Args)]
+pub struct GazeArgs {
+    #[command(flatten)]
+    pub recording: RecordingArgs,
+    /// Prediction horizons, ms.
+    #[arg(long, default_value = "10,20,30,50")]
+    pub horizons: String,
+    /// Physical width of the screen the recording was made on, cm, and the viewing distance.
+    #[arg(long, default_value_t = 53.0)]
+    pub display_width_cm: f64,
+    #[arg(long, default_value_t = 60.0)]
+    pub distance_cm: f64,
+}
+
+pub fn replay(a: ReplayArgs) -> Result<()> {
+    let rec = a.recording.load()?;
+    let url = url_is_allowed(&a.url, &a.allow_host)?;
+    let opts = fovea::client::replay::ReplayOptions {
+        url,
+        hello: fovea::protocol::Hello {
+            scene: a.scene.clone(),
+            preset: a.preset.clone(),
+            width: a.width,
+            height: a.height,
+            ..Default::default()
+        },
+        speed: a.speed,
+        start_ms: a.start_s * 1e3,
+        duration_ms: a.duration_s.map(|d| d * 1e3),
+        loops: a.loops,
+        keep_images: a.save_frames,
+    };
+    let runtime = tokio::runtime::Runtime::new()?;
+    let started = std::time::Instant::now();
+    let (frames, summary) = runtime.block_on(fovea::client::replay::replay(
+        &rec.samples,
+        &opts,
+        |done, total| {
+            eprint!(
+                "\rsent {done}/{total} samples ({:.0}%), {:.1} s",
+                100.0 * done as f64 / total.max(1) as f64,
+                started.elapsed().as_secs_f64()
+            );
+        },
+    ))?;
+    eprintln!();
+    std::fs::create_dir_all(&a.out).with_context(|| format!("creating {}", a.out.display()))?;
+    std::fs::write(
+        a.out.join("frames.csv"),
+        fovea::client::replay::frames_csv(&frames),
+    )?;
+    std::fs::write(
+        a.out.join("summary.json"),
+        serde_json::to_string_pretty(&summary)?,
+    )?;
+    if a.save_frames {
+        let dir = a.out.join("frames");
+        std::fs::create_dir_all(&dir)?;
+        for f in &frames {
+            if let Some(img) = &f.image {
+                std::fs::write(dir.join(format!("{:06}.jpg", f.frame)), img)?;
+            }
+        }
+    }
+    println!("{}", serde_json::to_string_pretty(&summary)?);
+    eprintln!("wrote {}/frames.csv and summary.json", a.out.display());
+    Ok(())
+}
+
+pub fn gaze(a: GazeArgs) -> Result<()> {
+    let rec = a.recording.load()?;
+    let (w, h) = a
+        .recording
+        .screen
+        .as_deref()
+        .map(parse_size)
+        .transpose()?
+        .unwrap_or((1920, 1080));
+    let viewing = fovea::optics::acuity::Viewing {
+        width: w,
+        height: h,
+        width_cm: a.display_width_cm,
+        distance_cm: a.distance_cm,
+    };
+    let horizons: Vec<f64> = a
+        .horizons
+        .split(',')
+        .map(|s| s.trim().parse::<f64>())
+        .collect::<Result<_, _>>()
+        .context("--horizons: numbers in ms")?;
+    let rows = fovea::gaze::evaluate::evaluate(&rec.samples, &viewing, &horizons);
+    println!("{}", fovea::gaze::evaluate::markdown(&rows));
+    Ok(())
+}

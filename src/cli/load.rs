@@ -1,0 +1,177 @@
+//! `fovea load`: the load generator's command line.
+
+use std::path::PathBuf;
+
+use anyhow::{bail, Context, Result};
+
+use super::gaze::RecordingArgs;
+use super::parse::url_is_allowed;
+
+#[derive(clap::Args)]
+pub struct LoadArgs {
+    #[arg(long, default_value = "ws://127.0.0.1:8080/ws")]
+    pub url: String,
+    /// Concurrent sessions.
+    #[arg(long, default_value_t = 4)]
+    pub sessions: usize,
+    /// Run several session counts in turn (e.g. 1,2,4,8) and report where the budget breaks.
+    #[arg(long)]
+    pub sweep: Option<String>,
+    /// Seconds per run (bounded: at most 600).
+    #[arg(long, default_value_t = 30.0)]
+    pub duration: f64,
+    /// Milliseconds between session starts.
+    #[arg(long, default_value_t = 100.0)]
+    pub ramp_up_ms: f64,
+    /// Gaze samples per second per session.
+    #[arg(long, default_value_t = 120.0)]
+    pub rate_hz: f64,
+    #[arg(long, default_value = fovea::scene::DEFAULT_SCENE)]
+    pub scene: String,
+    #[arg(long, default_value = "balanced")]
+    pub preset: String,
+    #[arg(long, default_value_t = 640)]
+    pub width: u32,
+    #[arg(long, default_value_t = 480)]
+    pub height: u32,
+    /// Sweep budget: p95 gaze-to-frame latency, ms.
+    #[arg(long, default_value_t = 500.0)]
+    pub budget_ms: f64,
+    /// Sweep budget: slowest session's frames per second.
+    #[arg(long, default_value_t = 2.0)]
+    pub min_fps: f64,
+    /// Synthetic-eye seed.
+    #[arg(long, default_value_t = 1)]
+    pub seed: u32,
+    /// Drive sessions with a gaze recording instead of the synthetic eye (each session starts
+    /// at a different offset; the recording loops). Samples are sent at their recorded timing.
+    #[arg(long)]
+    pub recording: Option<PathBuf>,
+    /// Screen size WxH of the recording, for formats in pixels.
+    #[arg(long)]
+    pub screen: Option<String>,
+    /// A non-loopback host this load may target (repeatable).
+    #[arg(long)]
+    pub allow_host: Vec<String>,
+    #[arg(long)]
+    pub out: PathBuf,
+}
+
+pub fn load(a: LoadArgs) -> Result<()> {
+    let url = url_is_allowed(&a.url, &a.allow_host)?;
+    let recording = match &a.recording {
+        Some(file) => {
+            let args = RecordingArgs {
+                file: file.clone(),
+                screen: a.screen.clone(),
+                format: None,
+                pupil_median_mm: 4.0,
+                time_col: "t_ms".into(),
+                x_col: "x".into(),
+                y_col: "y".into(),
+                pupil_col: "pupil_mm".into(),
+                time_unit: "ms".into(),
+                pixels: false,
+            };
+            Some(std::sync::Arc::new(args.load()?.samples))
+        }
+        None => None,
+    };
+    let counts: Vec<usize> = match &a.sweep {
+        Some(s) => s
+            .split(',')
+            .map(|n| n.trim().parse::<usize>())
+            .collect::<Result<_, _>>()
+            .context("--sweep: session counts like 1,2,4,8")?,
+        None => vec![a.sessions],
+    };
+    if counts.iter().any(|n| *n == 0 || *n > 256) {
+        bail!("session counts run from 1 to 256");
+    }
+    let duration = std::time::Duration::from_secs_f64(a.duration.clamp(1.0, 600.0));
+    let runtime = tokio::runtime::Runtime::new()?;
+    let mut reports = Vec::new();
+    std::fs::create_dir_all(&a.out).with_context(|| format!("creating {}", a.out.display()))?;
+    for n in counts {
+        let opts = fovea::client::load::LoadOptions {
+            url: url.clone(),
+            sessions: n,
+            duration,
+            ramp_up: std::time::Duration::from_secs_f64(a.ramp_up_ms.max(0.0) / 1000.0),
+            rate_hz: a.rate_hz,
+            hello: fovea::protocol::Hello {
+                scene: a.scene.clone(),
+                preset: a.preset.clone(),
+                width: a.width,
+                height: a.height,
+                ..Default::default()
+            },
+            seed: a.seed,
+            recording: recording.clone(),
+        };
+        let total = duration.as_secs_f64();
+        let report = runtime.block_on(fovea::client::load::run(&opts, move |sessions, t| {
+            eprint!("\r{sessions} sessions: {t:.0}/{total:.0} s");
+        }));
+        eprintln!();
+        println!(
+            "{} sessions: {} frames, {:.2} fps total, {:.2}–{:.2} fps per session (fairness {:.2}), gaze→frame p50 {:.1} p95 {:.1} p99 {:.1} max {:.1} ms; render p50 {:.1} ms; samples coalesced {}; errors {}, refused {}, failed {}",
+            n,
+            report.frames,
+            report.fps_total,
+            report.fps_min,
+            report.fps_max,
+            report.fairness,
+            report.latency_ms.p50,
+            report.latency_ms.p95,
+            report.latency_ms.p99,
+            report.latency_ms.max,
+            report.stages_ms.get("render").map(|p| p.p50).unwrap_or(f64::NAN),
+            report.samples_coalesced,
+            report.errors,
+            report.refused,
+            report.connection_failures
+        );
+        std::fs::write(
+            a.out.join(format!("load-{n}.svg")),
+            fovea::client::load::svg(&report),
+        )?;
+        reports.push(report);
+    }
+    let capacity = reports
+        .iter()
+        .filter(|r| {
+            r.latency_ms.p95 <= a.budget_ms
+                && r.fps_min >= a.min_fps
+                && r.refused == 0
+                && r.connection_failures == 0
+        })
+        .map(|r| r.sessions)
+        .max();
+    let json = serde_json::json!({
+        "url": url,
+        "scene": a.scene, "preset": a.preset, "width": a.width, "height": a.height, "rate_hz": a.rate_hz,
+        "budget": { "p95_ms": a.budget_ms, "min_fps": a.min_fps },
+        "capacity_sessions": capacity,
+        "runs": reports,
+    });
+    std::fs::write(
+        a.out.join("load.json"),
+        serde_json::to_string_pretty(&json)?,
+    )?;
+    if let Some(last) = reports.last() {
+        std::fs::write(a.out.join("load.svg"), fovea::client::load::svg(last))?;
+    }
+    match capacity {
+        Some(c) => println!(
+            "capacity within budget (p95 ≤ {} ms, ≥ {} fps per session): {c} sessions",
+            a.budget_ms, a.min_fps
+        ),
+        None => println!(
+            "no session count met the budget (p95 ≤ {} ms, ≥ {} fps per session)",
+            a.budget_ms, a.min_fps
+        ),
+    }
+    eprintln!("wrote {}/load.json and load.svg", a.out.display());
+    Ok(())
+}
