@@ -24,7 +24,15 @@ async fn main() -> Result<()> {
     };
     let (width, height, frames): (u32, u32, usize) = (w.parse()?, h.parse()?, n.parse()?);
     let mut c = Client::connect(url).await?;
-    let welcome = c.hello(&Hello { width, height, max_in_flight: 1, preset: preset.into(), ..Hello::default() }).await?;
+    let welcome = c
+        .hello(&Hello {
+            width,
+            height,
+            max_in_flight: 1,
+            preset: preset.into(),
+            ..Hello::default()
+        })
+        .await?;
     let clock = Instant::now();
     let (mut render, mut readback, mut encode, mut queue, mut round_trip, mut sampled) =
         (vec![], vec![], vec![], vec![], vec![], vec![]);
@@ -33,11 +41,28 @@ async fn main() -> Result<()> {
         // Sweep the gaze across the frame so every frame differs.
         let t = (seq as f64 * 0.618).fract();
         let t_ms = clock.elapsed().as_secs_f64() * 1e3;
-        c.gaze(&Gaze { seq, t_ms, x: t, y: 1.0 - t, pupil_mm: Some(4.0) }).await?;
+        c.gaze(&Gaze {
+            seq,
+            t_ms,
+            x: t,
+            y: 1.0 - t,
+            pupil_mm: Some(4.0),
+        })
+        .await?;
         let header = loop {
-            let ev = c.next_event(Duration::from_secs(30)).await.context("waiting for a frame")?;
-            let Event::Frame { header, .. } = ev else { continue };
-            c.ack(&Ack { frame: header.frame, t_ms: None, dropped: false }).await?;
+            let ev = c
+                .next_event(Duration::from_secs(30))
+                .await
+                .context("waiting for a frame")?;
+            let Event::Frame { header, .. } = ev else {
+                continue;
+            };
+            c.ack(&Ack {
+                frame: header.frame,
+                t_ms: None,
+                dropped: false,
+            })
+            .await?;
             if header.seq == Some(seq) {
                 break header;
             }

@@ -22,36 +22,73 @@ fn a_tiny_sweep_writes_json_markdown_and_svg() {
         pupil_mm: 4.0,
     };
     let mut calls = 0;
-    let report = run(&mut renderer, &opts, &AtomicBool::new(false), &mut |done, total, _| {
-        assert!(done <= total);
-        calls += 1;
-    })
+    let report = run(
+        &mut renderer,
+        &opts,
+        &AtomicBool::new(false),
+        &mut |done, total, _| {
+            assert!(done <= total);
+            calls += 1;
+        },
+    )
     .unwrap();
     assert!(calls > 0, "progress is reported");
     assert_eq!(report.records.len(), 2);
     let dir = std::env::temp_dir().join(format!("fovea-bench-{}", std::process::id()));
     write_reports(&report, &dir).unwrap();
 
-    let json: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(dir.join("bench.json")).unwrap()).unwrap();
-    assert!(json["machine"]["adapter"].as_str().is_some_and(|a| !a.is_empty()));
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("bench.json")).unwrap()).unwrap();
+    assert!(json["machine"]["adapter"]
+        .as_str()
+        .is_some_and(|a| !a.is_empty()));
     let records = json["records"].as_array().unwrap();
     assert_eq!(records.len(), 2);
     for r in records {
-        for key in ["config", "frame_ms", "passes_ms", "encode_ms", "bytes", "sampled", "errors", "settings", "pareto"] {
+        for key in [
+            "config",
+            "frame_ms",
+            "passes_ms",
+            "encode_ms",
+            "bytes",
+            "sampled",
+            "errors",
+            "settings",
+            "pareto",
+        ] {
             assert!(r.get(key).is_some(), "record lacks {key}");
         }
-        for e in ["psnr", "ssim", "flip", "psnr_pooled", "flip_pooled", "flip_fovea"] {
+        for e in [
+            "psnr",
+            "ssim",
+            "flip",
+            "psnr_pooled",
+            "flip_pooled",
+            "flip_fovea",
+        ] {
             assert!(r["errors"][e].is_number(), "errors.{e}");
         }
     }
     let full = records.iter().find(|r| r["config"] == "full").unwrap();
-    assert_eq!(full["speedup_vs_full"].as_f64(), Some(1.0), "full is its own baseline");
-    assert!(records.iter().any(|r| r["pareto"] == true), "someone is on the front");
+    assert_eq!(
+        full["speedup_vs_full"].as_f64(),
+        Some(1.0),
+        "full is its own baseline"
+    );
+    assert!(
+        records.iter().any(|r| r["pareto"] == true),
+        "someone is on the front"
+    );
 
     let md = std::fs::read_to_string(dir.join("bench.md")).unwrap();
     assert!(md.contains("| ") && md.contains("full") && md.contains("fast") && md.contains("FLIP"));
     let svg = std::fs::read_to_string(dir.join("bench.svg")).unwrap();
-    assert!(svg.starts_with("<svg") && svg.trim_end().ends_with("</svg>") && svg.contains("<polyline") && svg.contains("fast"));
+    assert!(
+        svg.starts_with("<svg")
+            && svg.trim_end().ends_with("</svg>")
+            && svg.contains("<polyline")
+            && svg.contains("fast")
+    );
     let _ = std::fs::remove_dir_all(&dir);
 }
 
@@ -77,5 +114,8 @@ fn stopping_early_keeps_what_was_measured() {
     })
     .unwrap();
     assert!(report.interrupted);
-    assert!(!report.records.is_empty() && report.records.iter().all(|r| r.frames >= 1), "partial results are kept");
+    assert!(
+        !report.records.is_empty() && report.records.iter().all(|r| r.frames >= 1),
+        "partial results are kept"
+    );
 }

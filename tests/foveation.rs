@@ -20,14 +20,23 @@ fn foveated(preset: &str, w: u32, h: u32, gaze: [f32; 2]) -> FrameRequest {
 }
 
 fn inspect(r: &Renderer, req: &FrameRequest) -> Inspection {
-    r.inspect(req.stream, &req.scene, req.width, req.height).unwrap()
+    r.inspect(req.stream, &req.scene, req.width, req.height)
+        .unwrap()
 }
 
 fn assert_finite(what: &str, img: &Inspection) {
     for (k, v) in img.resolved.iter().enumerate() {
-        assert!(v.iter().all(|c| c.is_finite()), "{what}: resolved pixel {k} is {v:?}");
+        assert!(
+            v.iter().all(|c| c.is_finite()),
+            "{what}: resolved pixel {k} is {v:?}"
+        );
     }
-    assert!(img.probability.iter().all(|p| p.is_finite() && (0.0..=1.0).contains(p)), "{what}: probability");
+    assert!(
+        img.probability
+            .iter()
+            .all(|p| p.is_finite() && (0.0..=1.0).contains(p)),
+        "{what}: probability"
+    );
 }
 
 #[test]
@@ -41,9 +50,19 @@ fn with_every_pixel_sampled_the_foveated_path_equals_full_shading() {
     all.settings.foveation.min_probability = 1.0;
     all.stream = 2;
     let frame = r.render(&all).unwrap();
-    assert_eq!(reference.rgba, frame.rgba, "ξ = 1 must reproduce full shading exactly");
-    let covered = inspect(&r, &all).flags.iter().filter(|f| **f & FLAG_COVERED != 0).count();
-    assert!((frame.sampled - covered as f64 / f64::from(w * h)).abs() < 1e-9, "sampled counts shaded pixels");
+    assert_eq!(
+        reference.rgba, frame.rgba,
+        "ξ = 1 must reproduce full shading exactly"
+    );
+    let covered = inspect(&r, &all)
+        .flags
+        .iter()
+        .filter(|f| **f & FLAG_COVERED != 0)
+        .count();
+    assert!(
+        (frame.sampled - covered as f64 / f64::from(w * h)).abs() < 1e-9,
+        "sampled counts shaded pixels"
+    );
     assert_eq!(reference.sampled, 1.0);
 }
 
@@ -51,7 +70,10 @@ fn with_every_pixel_sampled_the_foveated_path_equals_full_shading() {
 fn sampling_map_matches_the_cpu_acuity_model() {
     let mut r = renderer();
     let (w, h) = (160, 120);
-    for (stream, form, gaze) in [(1, ProbabilityForm::Density, [0.5, 0.5]), (2, ProbabilityForm::Linear, [0.1, 0.9])] {
+    for (stream, form, gaze) in [
+        (1, ProbabilityForm::Density, [0.5, 0.5]),
+        (2, ProbabilityForm::Linear, [0.1, 0.9]),
+    ] {
         let mut req = foveated("balanced", w, h, gaze);
         req.stream = stream;
         let f = &mut req.settings.foveation;
@@ -62,8 +84,16 @@ fn sampling_map_matches_the_cpu_acuity_model() {
         let f = req.settings.foveation;
         r.render(&req).unwrap();
         let img = inspect(&r, &req);
-        let v = Viewing { width: w, height: h, width_cm: req.display.width_cm, distance_cm: req.display.distance_cm };
-        let g = [f64::from(gaze[0]) * f64::from(w), f64::from(gaze[1]) * f64::from(h)];
+        let v = Viewing {
+            width: w,
+            height: h,
+            width_cm: req.display.width_cm,
+            distance_cm: req.display.distance_cm,
+        };
+        let g = [
+            f64::from(gaze[0]) * f64::from(w),
+            f64::from(gaze[1]) * f64::from(h),
+        ];
         let (slope, w0) = (f64::from(f.mar_slope), f64::from(f.mar_w0_deg));
         let w_min = v.pixel_angle_deg();
         let w_far = mar_deg(v.max_eccentricity_deg(g), slope, w0);
@@ -77,11 +107,19 @@ fn sampling_map_matches_the_cpu_acuity_model() {
             let e = v.eccentricity_deg(g, px);
             let p = acuity_probability(form, mar_deg(e, slope, w0), w_min, w_far).max(0.02);
             let gpu = f64::from(img.probability[k]);
-            assert!((gpu - p).abs() < 1e-4, "{form:?} pixel {k}: GPU {gpu}, CPU {p}");
+            assert!(
+                (gpu - p).abs() < 1e-4,
+                "{form:?} pixel {k}: GPU {gpu}, CPU {p}"
+            );
             // First frame of a stream: tile offset (0, 0).
-            let t = f64::from(thresholds[((k as u32 / w) % 64 * 64 + (k as u32 % w) % 64) as usize]);
+            let t =
+                f64::from(thresholds[((k as u32 / w) % 64 * 64 + (k as u32 % w) % 64) as usize]);
             if (t - p).abs() > 1e-4 {
-                assert_eq!(img.flags[k] & FLAG_SAMPLED != 0, t < p, "{form:?} pixel {k}: threshold {t}, p {p}");
+                assert_eq!(
+                    img.flags[k] & FLAG_SAMPLED != 0,
+                    t < p,
+                    "{form:?} pixel {k}: threshold {t}, p {p}"
+                );
             }
             checked += 1;
         }
@@ -99,11 +137,15 @@ fn gpu_jump_flooding_and_resolve_match_the_cpu_twins() {
         req.stream = 7;
         r.render(&req).unwrap();
         let img = inspect(&r, &req);
-        let steps = req.settings.foveation.jfa_steps(w, h, fovea::render::MIN_XI);
+        let steps = req
+            .settings
+            .foveation
+            .jfa_steps(w, h, fovea::render::MIN_XI);
         let cpu_nearest = jfa_with_steps(w, h, &img.seeds, &steps);
         assert_eq!(img.nearest, cpu_nearest, "JFA: GPU and CPU differ");
         let covered: Vec<bool> = img.flags.iter().map(|f| f & FLAG_COVERED != 0).collect();
-        let window = (reconstruction == Reconstruction::Sibson).then(|| req.settings.foveation.sibson_max_window());
+        let window = (reconstruction == Reconstruction::Sibson)
+            .then(|| req.settings.foveation.sibson_max_window());
         let cpu = reconstruct(w, h, &img.nearest, &covered, &img.color, &img.color, window);
         let mut worst = 0.0f32;
         for k in 0..covered.len() {
@@ -114,7 +156,10 @@ fn gpu_jump_flooding_and_resolve_match_the_cpu_twins() {
             }
         }
         // The GPU stores the result as f16: relative error ≤ 2⁻¹¹ on values ≤ 1.
-        assert!(worst < 1e-3, "{reconstruction:?}: GPU resolve differs from CPU by {worst}");
+        assert!(
+            worst < 1e-3,
+            "{reconstruction:?}: GPU resolve differs from CPU by {worst}"
+        );
     }
 }
 
@@ -146,7 +191,11 @@ fn compaction_changes_the_cost_not_the_image() {
     let fa = r.render(&a).unwrap();
     let fb = r.render(&b).unwrap();
     assert_eq!(fa.rgba, fb.rgba);
-    assert!(fa.sampled > 0.0 && fa.sampled < 0.5, "sampled {}", fa.sampled);
+    assert!(
+        fa.sampled > 0.0 && fa.sampled < 0.5,
+        "sampled {}",
+        fa.sampled
+    );
 }
 
 #[test]
@@ -156,14 +205,39 @@ fn static_view_reuses_history_and_a_camera_jump_invalidates_all_of_it() {
     req.stream = 3;
     r.render(&req).unwrap();
     let first = inspect(&r, &req);
-    assert_eq!(first.flags.iter().filter(|f| **f & FLAG_REUSED != 0).count(), 0, "nothing to reuse on frame 1");
+    assert_eq!(
+        first
+            .flags
+            .iter()
+            .filter(|f| **f & FLAG_REUSED != 0)
+            .count(),
+        0,
+        "nothing to reuse on frame 1"
+    );
     r.render(&req).unwrap();
     let second = inspect(&r, &req);
-    let covered = second.flags.iter().filter(|f| **f & FLAG_COVERED != 0).count();
-    let sampled = second.flags.iter().filter(|f| **f & FLAG_SAMPLED != 0).count();
-    let reused = second.flags.iter().filter(|f| **f & FLAG_REUSED != 0).count();
+    let covered = second
+        .flags
+        .iter()
+        .filter(|f| **f & FLAG_COVERED != 0)
+        .count();
+    let sampled = second
+        .flags
+        .iter()
+        .filter(|f| **f & FLAG_SAMPLED != 0)
+        .count();
+    let reused = second
+        .flags
+        .iter()
+        .filter(|f| **f & FLAG_REUSED != 0)
+        .count();
     // Static view: every unsampled pixel that was a seed last frame passes the depth test.
-    let was_seed = first.seeds.iter().zip(&second.flags).filter(|(s, f)| **s != NO_SEED && **f & FLAG_SAMPLED == 0).count();
+    let was_seed = first
+        .seeds
+        .iter()
+        .zip(&second.flags)
+        .filter(|(s, f)| **s != NO_SEED && **f & FLAG_SAMPLED == 0)
+        .count();
     assert_eq!(reused, was_seed, "covered {covered}, sampled {sampled}");
 
     let scene = Scene::builtin("bunny").unwrap();
@@ -172,8 +246,15 @@ fn static_view_reuses_history_and_a_camera_jump_invalidates_all_of_it() {
     req.camera = Some(cam);
     r.render(&req).unwrap();
     let jumped = inspect(&r, &req);
-    let reused_after_jump = jumped.flags.iter().filter(|f| **f & FLAG_REUSED != 0).count();
-    assert!(reused_after_jump * 100 < covered, "after a camera jump {reused_after_jump} pixels reused");
+    let reused_after_jump = jumped
+        .flags
+        .iter()
+        .filter(|f| **f & FLAG_REUSED != 0)
+        .count();
+    assert!(
+        reused_after_jump * 100 < covered,
+        "after a camera jump {reused_after_jump} pixels reused"
+    );
     assert_finite("camera jump", &jumped);
 }
 
@@ -186,7 +267,11 @@ fn history_age_cap_forces_misses() {
     r.render(&req).unwrap();
     r.render(&req).unwrap();
     let img = inspect(&r, &req);
-    assert_eq!(img.flags.iter().filter(|f| **f & FLAG_REUSED != 0).count(), 0, "age cap 0 reuses nothing");
+    assert_eq!(
+        img.flags.iter().filter(|f| **f & FLAG_REUSED != 0).count(),
+        0,
+        "age cap 0 reuses nothing"
+    );
 }
 
 #[test]
@@ -228,8 +313,16 @@ fn extremes_give_finite_sensible_frames() {
     for (i, (what, mut q)) in cases.into_iter().enumerate() {
         q.stream = 100 + i as u64;
         let frame = r.render(&q).unwrap_or_else(|e| panic!("{what}: {e}"));
-        assert_eq!(frame.rgba.len(), (q.width * q.height * 4) as usize, "{what}");
-        assert!(frame.sampled.is_finite() && (0.0..=1.0).contains(&frame.sampled), "{what}: sampled {}", frame.sampled);
+        assert_eq!(
+            frame.rgba.len(),
+            (q.width * q.height * 4) as usize,
+            "{what}"
+        );
+        assert!(
+            frame.sampled.is_finite() && (0.0..=1.0).contains(&frame.sampled),
+            "{what}: sampled {}",
+            frame.sampled
+        );
         assert_finite(&what, &inspect(&r, &q));
     }
 }
@@ -249,7 +342,10 @@ fn with_xi_zero_and_gaze_off_the_object_only_the_forced_minimum_is_shaded() {
     let covered = img.flags.iter().filter(|f| **f & FLAG_COVERED != 0).count();
     let sampled = img.flags.iter().filter(|f| **f & FLAG_SAMPLED != 0).count();
     // One shaded pixel per 64×64 tile at least, and hardly more.
-    assert!(sampled >= 1 && sampled * 500 < covered, "{sampled} of {covered} covered pixels sampled");
+    assert!(
+        sampled >= 1 && sampled * 500 < covered,
+        "{sampled} of {covered} covered pixels sampled"
+    );
     assert!(frame.sampled > 0.0);
     assert_finite("forced minimum", &img);
 }
@@ -280,9 +376,11 @@ fn saliency_in_the_sampling_map_matches_the_cpu_twin() {
             let mut normal = [[0.0f32; 3]; 9];
             for j in 0..3 {
                 for i in 0..3 {
-                    let q = ((y + j - 1).clamp(0, hi - 1) * wi + (x + i - 1).clamp(0, wi - 1)) as usize;
+                    let q =
+                        ((y + j - 1).clamp(0, hi - 1) * wi + (x + i - 1).clamp(0, wi - 1)) as usize;
                     if img.flags[q] & FLAG_COVERED != 0 {
-                        albedo[(j * 3 + i) as usize] = scene.materials[0].1.albedo().map(|a| a as f32);
+                        albedo[(j * 3 + i) as usize] =
+                            scene.materials[0].1.albedo().map(|a| a as f32);
                         let n = img.normal_distance[q];
                         normal[(j * 3 + i) as usize] = [n[0], n[1], n[2]];
                     }
@@ -290,13 +388,19 @@ fn saliency_in_the_sampling_map_matches_the_cpu_twin() {
             }
             let cpu = saliency(&albedo, &normal).max(fovea::render::MIN_XI);
             let gpu = img.probability[k];
-            assert!((gpu - cpu).abs() < 2e-3, "pixel ({x},{y}): GPU {gpu}, CPU {cpu}");
+            assert!(
+                (gpu - cpu).abs() < 2e-3,
+                "pixel ({x},{y}): GPU {gpu}, CPU {cpu}"
+            );
             if cpu > 0.5 {
                 salient += 1;
             }
         }
     }
-    assert!(salient > 50, "silhouettes and creases are salient: {salient} pixels");
+    assert!(
+        salient > 50,
+        "silhouettes and creases are salient: {salient} pixels"
+    );
 }
 
 #[test]
@@ -319,10 +423,21 @@ fn depth_of_field_lowers_the_sampling_map_as_the_cpu_model_says() {
         let f = req.settings.foveation;
         r.render(&req).unwrap();
         let img = inspect(&r, &req);
-        let v = Viewing { width: w, height: h, width_cm: req.display.width_cm, distance_cm: req.display.distance_cm };
-        let g = [f64::from(gaze[0]) * f64::from(w), f64::from(gaze[1]) * f64::from(h)];
+        let v = Viewing {
+            width: w,
+            height: h,
+            width_cm: req.display.width_cm,
+            distance_cm: req.display.distance_cm,
+        };
+        let g = [
+            f64::from(gaze[0]) * f64::from(w),
+            f64::from(gaze[1]) * f64::from(h),
+        ];
         let (slope, w0) = (f64::from(f.mar_slope), f64::from(f.mar_w0_deg));
-        let (w_min, w_far) = (v.pixel_angle_deg(), mar_deg(v.max_eccentricity_deg(g), slope, w0));
+        let (w_min, w_far) = (
+            v.pixel_angle_deg(),
+            mar_deg(v.max_eccentricity_deg(g), slope, w0),
+        );
         // Focus: the distance under the gaze pixel; metres per unit and radians per pixel as the renderer sets them.
         let gk = (g[1].floor() as u32 * w + g[0].floor() as u32) as usize;
         let under_gaze = f64::from(img.normal_distance[gk][3]);
@@ -338,12 +453,20 @@ fn depth_of_field_lowers_the_sampling_map_as_the_cpu_model_says() {
                 continue;
             }
             let px = [(k as u32 % w) as f64 + 0.5, (k as u32 / w) as f64 + 0.5];
-            let p = acuity_probability(f.probability, mar_deg(v.eccentricity_deg(g, px), slope, w0), w_min, w_far);
+            let p = acuity_probability(
+                f.probability,
+                mar_deg(v.eccentricity_deg(g, px), slope, w0),
+                w_min,
+                w_far,
+            );
             let d_m = f64::from(img.normal_distance[k][3]) * scene.metres_per_unit();
             let blur_px = blur_angle_rad(f64::from(pupil), focus_m, d_m) / rad_per_px;
             let expected = (p * dof_factor(blur_px)).max(f64::from(fovea::render::MIN_XI));
             let gpu = f64::from(img.probability[k]);
-            assert!((gpu - expected).abs() < 1e-3 + 2e-3 * expected, "pupil {pupil} pixel {k}: GPU {gpu}, CPU {expected}");
+            assert!(
+                (gpu - expected).abs() < 1e-3 + 2e-3 * expected,
+                "pupil {pupil} pixel {k}: GPU {gpu}, CPU {expected}"
+            );
             checked += 1;
             lowered += usize::from(dof_factor(blur_px) < 1.0);
         }
@@ -351,5 +474,8 @@ fn depth_of_field_lowers_the_sampling_map_as_the_cpu_model_says() {
         out_of_focus.push(lowered);
     }
     // A wider pupil narrows the in-focus band: more pixels are blurred and sampled less.
-    assert!(out_of_focus[1] > 100 && out_of_focus[1] > out_of_focus[0], "out of focus at 2 and 8 mm: {out_of_focus:?}");
+    assert!(
+        out_of_focus[1] > 100 && out_of_focus[1] > out_of_focus[0],
+        "out of focus at 2 and 8 mm: {out_of_focus:?}"
+    );
 }

@@ -15,8 +15,16 @@ async fn server(record: Option<std::path::PathBuf>) -> (String, CancellationToke
     let listener = tokio::net::TcpListener::bind("127.0.0.1:0").await.unwrap();
     let url = format!("ws://{}/ws", listener.local_addr().unwrap());
     let shutdown = CancellationToken::new();
-    let options = fovea::server::ServerOptions { record_dir: record, ..Default::default() };
-    tokio::spawn(fovea::server::run_with(listener, render, shutdown.clone(), options));
+    let options = fovea::server::ServerOptions {
+        record_dir: record,
+        ..Default::default()
+    };
+    tokio::spawn(fovea::server::run_with(
+        listener,
+        render,
+        shutdown.clone(),
+        options,
+    ));
     (url, shutdown)
 }
 
@@ -24,7 +32,13 @@ fn options(url: &str) -> ReplayOptions {
     ReplayOptions {
         url: url.to_string(),
         // The opaque scene keeps frames cheap on the software adapter.
-        hello: Hello { scene: "bunny".into(), width: 96, height: 64, preset: "fast".into(), ..Hello::default() },
+        hello: Hello {
+            scene: "bunny".into(),
+            width: 96,
+            height: 64,
+            preset: "fast".into(),
+            ..Hello::default()
+        },
         speed: 1.0,
         start_ms: 0.0,
         duration_ms: None,
@@ -36,15 +50,32 @@ fn options(url: &str) -> ReplayOptions {
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn a_real_recording_replays_with_nothing_lost_and_much_coalesced() {
     let text = include_str!("../assets/gaze/eyelink_1000hz_1920x1080.csv");
-    let rec = parse(text, &ParseOptions { screen: Some((1920, 1080)), ..Default::default() }).unwrap();
+    let rec = parse(
+        text,
+        &ParseOptions {
+            screen: Some((1920, 1080)),
+            ..Default::default()
+        },
+    )
+    .unwrap();
     let (url, shutdown) = server(None).await;
     // 1.5 s of the 1000 Hz recording around a blink (blink at 11.298 s).
-    let opts = ReplayOptions { start_ms: 10_500.0, duration_ms: Some(1_500.0), ..options(&url) };
+    let opts = ReplayOptions {
+        start_ms: 10_500.0,
+        duration_ms: Some(1_500.0),
+        ..options(&url)
+    };
     let (frames, summary) = replay(&rec.samples, &opts, |_, _| {}).await.unwrap();
     assert_eq!(summary.samples_in_selection, 1500);
-    assert!(summary.samples_unsendable > 0, "the blink's samples are not sent");
+    assert!(
+        summary.samples_unsendable > 0,
+        "the blink's samples are not sent"
+    );
     assert_eq!(summary.samples_lost, 0, "{summary:?}");
-    assert!(summary.samples_coalesced > summary.frames as u64, "1000 Hz samples outrun the frames: {summary:?}");
+    assert!(
+        summary.samples_coalesced > summary.frames as u64,
+        "1000 Hz samples outrun the frames: {summary:?}"
+    );
     assert!(frames.len() >= 10, "{} frames", frames.len());
     assert!(frames.iter().all(|f| f.latency_ms.is_none_or(|l| l > 0.0)));
     // Frames answer samples in order.
@@ -58,8 +89,21 @@ async fn a_recorded_session_replays_to_the_same_frames() {
     let dir = std::env::temp_dir().join(format!("fovea-record-{}", std::process::id()));
     let _ = std::fs::remove_dir_all(&dir);
     let (url, shutdown) = server(Some(dir.clone())).await;
-    let synthetic = fovea::gaze::synthetic::generate(5, &fovea::optics::acuity::Viewing { width: 96, height: 64, width_cm: 53.0, distance_cm: 60.0 }, 60.0, 1000.0);
-    let slow = ReplayOptions { speed: 0.5, ..options(&url) };
+    let synthetic = fovea::gaze::synthetic::generate(
+        5,
+        &fovea::optics::acuity::Viewing {
+            width: 96,
+            height: 64,
+            width_cm: 53.0,
+            distance_cm: 60.0,
+        },
+        60.0,
+        1000.0,
+    );
+    let slow = ReplayOptions {
+        speed: 0.5,
+        ..options(&url)
+    };
     let (first, _) = replay(&synthetic, &slow, |_, _| {}).await.unwrap();
     // The session ended with the replay; its recording lands once the server notices.
     let path = dir.join("session-1.csv");
@@ -77,12 +121,21 @@ async fn a_recorded_session_replays_to_the_same_frames() {
     let (second, _) = replay(&recorded.samples, &slow, |_, _| {}).await.unwrap();
     // A frame answering sample k shows the same gaze in both runs. (Which samples get their
     // own frame depends on timing: a slow first frame, while shaders compile, coalesces a few.)
-    let gazes = |f: &[fovea::client::replay::FrameRecord]| -> std::collections::BTreeMap<u64, (f64, f64)> {
-        f.iter().filter_map(|f| Some((f.seq?, (f.gaze_x, f.gaze_y)))).collect()
-    };
+    let gazes =
+        |f: &[fovea::client::replay::FrameRecord]| -> std::collections::BTreeMap<u64, (f64, f64)> {
+            f.iter()
+                .filter_map(|f| Some((f.seq?, (f.gaze_x, f.gaze_y))))
+                .collect()
+        };
     let (a, b) = (gazes(&first), gazes(&second));
     let common: Vec<u64> = a.keys().filter(|k| b.contains_key(k)).copied().collect();
-    assert!(common.len() > 20, "{} frames in common ({} and {})", common.len(), a.len(), b.len());
+    assert!(
+        common.len() > 20,
+        "{} frames in common ({} and {})",
+        common.len(),
+        a.len(),
+        b.len()
+    );
     for k in common {
         assert_eq!(a[&k], b[&k], "sample {k}");
     }

@@ -22,28 +22,55 @@ async fn server(options: ServerOptions) -> (SocketAddr, CancellationToken) {
     let listener = tokio::net::TcpListener::bind("127.0.0.1:0").await.unwrap();
     let addr = listener.local_addr().unwrap();
     let shutdown = CancellationToken::new();
-    tokio::spawn(fovea::server::run_with(listener, render, shutdown.clone(), options));
+    tokio::spawn(fovea::server::run_with(
+        listener,
+        render,
+        shutdown.clone(),
+        options,
+    ));
     (addr, shutdown)
 }
 
 fn small() -> Hello {
-    Hello { scene: "bunny".into(), width: 64, height: 48, preset: "fast".into(), ..Hello::default() }
+    Hello {
+        scene: "bunny".into(),
+        width: 64,
+        height: 48,
+        preset: "fast".into(),
+        ..Hello::default()
+    }
 }
 
 async fn http_get(addr: SocketAddr, path: &str) -> String {
     let mut s = tokio::net::TcpStream::connect(addr).await.unwrap();
-    s.write_all(format!("GET {path} HTTP/1.1\r\nHost: x\r\nConnection: close\r\n\r\n").as_bytes()).await.unwrap();
+    s.write_all(format!("GET {path} HTTP/1.1\r\nHost: x\r\nConnection: close\r\n\r\n").as_bytes())
+        .await
+        .unwrap();
     let mut out = String::new();
     s.read_to_string(&mut out).await.unwrap();
     out
 }
 
 async fn frame_for(c: &mut Client, seq: u64) {
-    c.gaze(&Gaze { seq, t_ms: seq as f64, x: 0.3 + 0.01 * (seq % 10) as f64, y: 0.5, pupil_mm: None }).await.unwrap();
+    c.gaze(&Gaze {
+        seq,
+        t_ms: seq as f64,
+        x: 0.3 + 0.01 * (seq % 10) as f64,
+        y: 0.5,
+        pupil_mm: None,
+    })
+    .await
+    .unwrap();
     loop {
         match c.next_event(WAIT).await.unwrap() {
             Event::Frame { header, .. } => {
-                c.ack(&Ack { frame: header.frame, t_ms: None, dropped: false }).await.unwrap();
+                c.ack(&Ack {
+                    frame: header.frame,
+                    t_ms: None,
+                    dropped: false,
+                })
+                .await
+                .unwrap();
                 if header.seq == Some(seq) {
                     return;
                 }
@@ -57,7 +84,12 @@ async fn frame_for(c: &mut Client, seq: u64) {
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn admission_stalls_and_the_load_report() {
     let _serial = SERIAL.lock().await;
-    let (addr, shutdown) = server(ServerOptions { max_sessions: 2, stall_timeout: Duration::from_millis(1500), ..Default::default() }).await;
+    let (addr, shutdown) = server(ServerOptions {
+        max_sessions: 2,
+        stall_timeout: Duration::from_millis(1500),
+        ..Default::default()
+    })
+    .await;
     let url = format!("ws://{addr}/ws");
     assert!(http_get(addr, "/readyz").await.starts_with("HTTP/1.1 200"));
 
@@ -68,7 +100,10 @@ async fn admission_stalls_and_the_load_report() {
     b.hello(&small()).await.unwrap();
     let mut c = Client::connect(&url).await.unwrap();
     match c.next_event(WAIT).await.unwrap() {
-        Event::Closed(Some((code, reason))) => assert!(code == 1013 && reason.contains("capacity"), "{code} {reason}"),
+        Event::Closed(Some((code, reason))) => assert!(
+            code == 1013 && reason.contains("capacity"),
+            "{code} {reason}"
+        ),
         other => panic!("the third client got {other:?}"),
     }
     assert!(http_get(addr, "/readyz").await.starts_with("HTTP/1.1 503"));
@@ -78,7 +113,15 @@ async fn admission_stalls_and_the_load_report() {
 
     // A stalled client (never acks) is disconnected while the other keeps getting frames.
     // b asks for one more frame and never acknowledges it.
-    b.gaze(&Gaze { seq: 2, t_ms: 2.0, x: 0.6, y: 0.5, pupil_mm: None }).await.unwrap();
+    b.gaze(&Gaze {
+        seq: 2,
+        t_ms: 2.0,
+        x: 0.6,
+        y: 0.5,
+        pupil_mm: None,
+    })
+    .await
+    .unwrap();
     let mut seq = 10;
     let closed = loop {
         frame_for(&mut a, seq).await;
@@ -89,32 +132,63 @@ async fn admission_stalls_and_the_load_report() {
         }
     };
     let (code, reason) = closed.expect("a close frame with a reason");
-    assert!(code == 1008 && reason.contains("acknowledged"), "{code} {reason}");
+    assert!(
+        code == 1008 && reason.contains("acknowledged"),
+        "{code} {reason}"
+    );
     frame_for(&mut a, seq).await;
     drop(a);
     tokio::time::sleep(Duration::from_millis(300)).await;
 
     // The load tool against the same server: fields present, counts agree with /metrics.
     let before = metric(&http_get(addr, "/metrics").await, "fovea_frames_sent_total");
-    let opts = LoadOptions { url: url.clone(), sessions: 2, duration: Duration::from_secs(3), ramp_up: Duration::from_millis(50), rate_hz: 60.0, hello: small(), seed: 3, recording: None };
+    let opts = LoadOptions {
+        url: url.clone(),
+        sessions: 2,
+        duration: Duration::from_secs(3),
+        ramp_up: Duration::from_millis(50),
+        rate_hz: 60.0,
+        hello: small(),
+        seed: 3,
+        recording: None,
+    };
     let report = run(&opts, |_, _| {}).await;
     let after = metric(&http_get(addr, "/metrics").await, "fovea_frames_sent_total");
     assert_eq!(report.refused + report.connection_failures, 0);
     assert!(report.frames > 5, "{report:?}");
     // The last frame or two may be in flight when a session closes: sent but not received.
     let sent = (after - before) as u64;
-    assert!(sent >= report.frames && sent <= report.frames + 2 * report.sessions as u64, "server sent {sent}, clients received {}", report.frames);
-    assert!(report.latency_ms.count > 0 && report.latency_ms.p50 > 0.0 && report.latency_ms.p99 >= report.latency_ms.p50);
+    assert!(
+        sent >= report.frames && sent <= report.frames + 2 * report.sessions as u64,
+        "server sent {sent}, clients received {}",
+        report.frames
+    );
+    assert!(
+        report.latency_ms.count > 0
+            && report.latency_ms.p50 > 0.0
+            && report.latency_ms.p99 >= report.latency_ms.p50
+    );
     for stage in ["queue", "render", "readback", "encode"] {
         assert!(report.stages_ms.contains_key(stage), "{stage}");
     }
     assert_eq!(report.fps_per_session.len(), 2);
     let json = serde_json::to_value(&report).unwrap();
-    for field in ["fps_total", "fairness", "latency_ms", "stages_ms", "errors", "refused", "fps_timeline"] {
+    for field in [
+        "fps_total",
+        "fairness",
+        "latency_ms",
+        "stages_ms",
+        "errors",
+        "refused",
+        "fps_timeline",
+    ] {
         assert!(json.get(field).is_some(), "{field}");
     }
     let m = http_get(addr, "/metrics").await;
-    assert!(m.contains("fovea_stage_seconds_bucket") && m.contains("fovea_sessions_refused_total"), "{m}");
+    assert!(
+        m.contains("fovea_stage_seconds_bucket") && m.contains("fovea_sessions_refused_total"),
+        "{m}"
+    );
     shutdown.cancel();
 }
 
@@ -123,7 +197,14 @@ async fn load_can_be_driven_by_a_gaze_recording() {
     let _serial = SERIAL.lock().await;
     let (addr, shutdown) = server(ServerOptions::default()).await;
     let text = include_str!("../assets/gaze/eyelink_500hz_1920x1200.csv");
-    let rec = fovea::gaze::formats::parse(text, &fovea::gaze::formats::ParseOptions { screen: Some((1920, 1200)), ..Default::default() }).unwrap();
+    let rec = fovea::gaze::formats::parse(
+        text,
+        &fovea::gaze::formats::ParseOptions {
+            screen: Some((1920, 1200)),
+            ..Default::default()
+        },
+    )
+    .unwrap();
     let opts = LoadOptions {
         url: format!("ws://{addr}/ws"),
         sessions: 2,
@@ -137,7 +218,10 @@ async fn load_can_be_driven_by_a_gaze_recording() {
     let report = run(&opts, |_, _| {}).await;
     // 500 Hz for ~2 s per session, minus blinks and track loss.
     assert!(report.gaze_sent > 1000, "{} samples sent", report.gaze_sent);
-    assert!(report.frames > 4 && report.samples_coalesced > 0, "{report:?}");
+    assert!(
+        report.frames > 4 && report.samples_coalesced > 0,
+        "{report:?}"
+    );
     shutdown.cancel();
 }
 
@@ -154,11 +238,28 @@ async fn three_sessions_share_the_renderer_fairly() {
     let _serial = SERIAL.lock().await;
     let (addr, shutdown) = server(ServerOptions::default()).await;
     let url = format!("ws://{addr}/ws");
-    let opts = LoadOptions { url, sessions: 3, duration: Duration::from_secs(4), ramp_up: Duration::ZERO, rate_hz: 120.0, hello: small(), seed: 9, recording: None };
+    let opts = LoadOptions {
+        url,
+        sessions: 3,
+        duration: Duration::from_secs(4),
+        ramp_up: Duration::ZERO,
+        rate_hz: 120.0,
+        hello: small(),
+        seed: 9,
+        recording: None,
+    };
     let report = run(&opts, |_, _| {}).await;
     assert_eq!(report.fps_per_session.len(), 3);
-    assert!(report.fps_per_session.iter().all(|f| *f > 1.0), "every session gets frames: {:?}", report.fps_per_session);
+    assert!(
+        report.fps_per_session.iter().all(|f| *f > 1.0),
+        "every session gets frames: {:?}",
+        report.fps_per_session
+    );
     // One frame in the render queue per session at a time: nobody starves.
-    assert!(report.fairness > 0.6, "fps per session {:?}", report.fps_per_session);
+    assert!(
+        report.fairness > 0.6,
+        "fps per session {:?}",
+        report.fps_per_session
+    );
     shutdown.cancel();
 }

@@ -20,7 +20,9 @@ fn bunny_matches_the_cpu_rasteriser_in_coverage_and_shading() {
     let (w, h) = (96, 96);
     let scene = Scene::builtin("bunny").unwrap();
     let reference = render_reference(&scene, w, h, None);
-    let frame = renderer().render(&FrameRequest::new("bunny", w, h)).unwrap();
+    let frame = renderer()
+        .render(&FrameRequest::new("bunny", w, h))
+        .unwrap();
     let bg = reference.rgba[..3].to_vec();
 
     let mut gpu_covered = 0;
@@ -43,7 +45,9 @@ fn bunny_matches_the_cpu_rasteriser_in_coverage_and_shading() {
             // Compare shading only well inside the silhouette, where both sample one surface.
             let interior = x > 0 && y > 0 && x + 1 < w && y + 1 < h && {
                 let around = [(x - 1, y), (x + 1, y), (x, y - 1), (x, y + 1)];
-                around.iter().all(|&(i, j)| reference.covered[(j * w + i) as usize])
+                around
+                    .iter()
+                    .all(|&(i, j)| reference.covered[(j * w + i) as usize])
             };
             if interior {
                 let r = rgb(&reference.rgba, w, x, y);
@@ -54,27 +58,47 @@ fn bunny_matches_the_cpu_rasteriser_in_coverage_and_shading() {
     }
     let cpu_covered = reference.covered.iter().filter(|c| **c).count();
     // The bunny fills a fair share of the frame with the shipped camera.
-    assert!(cpu_covered > 1500 && cpu_covered < 5000, "CPU coverage {cpu_covered} px");
+    assert!(
+        cpu_covered > 1500 && cpu_covered < 5000,
+        "CPU coverage {cpu_covered} px"
+    );
     let share = (gpu_covered as f64 - cpu_covered as f64).abs() / cpu_covered as f64;
-    assert!(share < 0.01, "GPU covers {gpu_covered} px, CPU {cpu_covered} px");
+    assert!(
+        share < 0.01,
+        "GPU covers {gpu_covered} px, CPU {cpu_covered} px"
+    );
     // Edge pixels may go either way under different tie-breaking rules; nothing else may.
-    assert!(mismatched <= cpu_covered / 50, "{mismatched} pixels disagree on coverage");
+    assert!(
+        mismatched <= cpu_covered / 50,
+        "{mismatched} pixels disagree on coverage"
+    );
     // Same formula, f32 on both sides; a few steps of 1/255 cover the interpolation order.
-    assert!(worst_interior <= 3, "interior shading differs by up to {worst_interior}/255");
+    assert!(
+        worst_interior <= 3,
+        "interior shading differs by up to {worst_interior}/255"
+    );
 }
 
 #[test]
 fn background_pixels_equal_the_scene_background() {
     let scene = Scene::builtin("bunny").unwrap();
-    let frame = renderer().render(&FrameRequest::new("bunny", 64, 48)).unwrap();
+    let frame = renderer()
+        .render(&FrameRequest::new("bunny", 64, 48))
+        .unwrap();
     let bg = scene.file.background_srgb;
     for (x, y) in [(0, 0), (63, 0), (0, 47), (63, 47)] {
         let p = rgb(&frame.rgba, 64, x, y);
         for c in 0..3 {
-            assert!(p[c].abs_diff(bg[c]) <= 1, "corner ({x},{y}) is {p:?}, background {bg:?}");
+            assert!(
+                p[c].abs_diff(bg[c]) <= 1,
+                "corner ({x},{y}) is {p:?}, background {bg:?}"
+            );
         }
     }
-    assert!(frame.rgba.chunks_exact(4).all(|p| p[3] == 255), "frames are opaque");
+    assert!(
+        frame.rgba.chunks_exact(4).all(|p| p[3] == 255),
+        "frames are opaque"
+    );
 }
 
 /// Mean brightness of the bunny's left and right halves (in image space).
@@ -109,8 +133,14 @@ fn shading_follows_the_light_direction() {
     };
     let from_left = lit_from(Vec3::new(-1.0, 0.2, 0.3));
     let from_right = lit_from(Vec3::new(1.0, 0.2, 0.3));
-    assert!(from_left.0 > from_left.1 + 20.0, "lit from the left: halves {from_left:?}");
-    assert!(from_right.1 > from_right.0 + 20.0, "lit from the right: halves {from_right:?}");
+    assert!(
+        from_left.0 > from_left.1 + 20.0,
+        "lit from the left: halves {from_left:?}"
+    );
+    assert!(
+        from_right.1 > from_right.0 + 20.0,
+        "lit from the right: halves {from_right:?}"
+    );
 }
 
 #[test]
@@ -133,8 +163,14 @@ fn marker_is_drawn_where_the_gaze_is() {
         }
         assert!(n > 20.0, "marker at {gaze:?} has only {n} magenta pixels");
         let (cx, cy) = (sx / n, sy / n);
-        let (ex, ey) = (f64::from(gaze[0]) * f64::from(w), f64::from(gaze[1]) * f64::from(h));
-        assert!((cx - ex).abs() < 1.0 && (cy - ey).abs() < 1.0, "marker centroid ({cx:.1},{cy:.1}), gaze ({ex},{ey})");
+        let (ex, ey) = (
+            f64::from(gaze[0]) * f64::from(w),
+            f64::from(gaze[1]) * f64::from(h),
+        );
+        assert!(
+            (cx - ex).abs() < 1.0 && (cy - ey).abs() < 1.0,
+            "marker centroid ({cx:.1},{cy:.1}), gaze ({ex},{ey})"
+        );
     }
 }
 
@@ -153,9 +189,18 @@ fn tiny_odd_and_non_power_of_two_sizes_render() {
 #[test]
 fn impossible_sizes_and_scenes_are_errors_not_panics() {
     let mut r = renderer();
-    assert!(matches!(r.render(&FrameRequest::new("bunny", 0, 10)), Err(RenderError::Size { .. })));
-    assert!(matches!(r.render(&FrameRequest::new("bunny", 10, 100_000)), Err(RenderError::Size { .. })));
-    assert!(matches!(r.render(&FrameRequest::new("teapot", 10, 10)), Err(RenderError::Scene(_))));
+    assert!(matches!(
+        r.render(&FrameRequest::new("bunny", 0, 10)),
+        Err(RenderError::Size { .. })
+    ));
+    assert!(matches!(
+        r.render(&FrameRequest::new("bunny", 10, 100_000)),
+        Err(RenderError::Size { .. })
+    ));
+    assert!(matches!(
+        r.render(&FrameRequest::new("teapot", 10, 10)),
+        Err(RenderError::Scene(_))
+    ));
     // The renderer is still usable afterwards.
     assert!(r.render(&FrameRequest::new("bunny", 8, 8)).is_ok());
 }

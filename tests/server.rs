@@ -19,13 +19,18 @@ struct Server {
 
 impl Server {
     async fn start() -> Server {
-        let renderer = Renderer::new().unwrap_or_else(|e| panic!("server tests need a GPU adapter: {e}"));
+        let renderer =
+            Renderer::new().unwrap_or_else(|e| panic!("server tests need a GPU adapter: {e}"));
         let (render, _thread) = RenderThread::spawn(renderer).unwrap();
         let listener = tokio::net::TcpListener::bind("127.0.0.1:0").await.unwrap();
         let addr = listener.local_addr().unwrap();
         let shutdown = CancellationToken::new();
         let task = tokio::spawn(fovea::server::run(listener, render, shutdown.clone()));
-        Server { addr, shutdown, task }
+        Server {
+            addr,
+            shutdown,
+            task,
+        }
     }
 
     fn ws(&self) -> String {
@@ -38,16 +43,30 @@ impl Server {
 
     async fn stop(self) {
         self.shutdown.cancel();
-        tokio::time::timeout(WAIT, self.task).await.expect("server stops").unwrap().unwrap();
+        tokio::time::timeout(WAIT, self.task)
+            .await
+            .expect("server stops")
+            .unwrap()
+            .unwrap();
     }
 }
 
 fn gaze(seq: u64, x: f64, y: f64) -> Gaze {
-    Gaze { seq, t_ms: seq as f64 * 4.0, x, y, pupil_mm: Some(4.0) }
+    Gaze {
+        seq,
+        t_ms: seq as f64 * 4.0,
+        x,
+        y,
+        pupil_mm: Some(4.0),
+    }
 }
 
 fn hello(width: u32, height: u32) -> Hello {
-    Hello { width, height, ..Hello::default() }
+    Hello {
+        width,
+        height,
+        ..Hello::default()
+    }
 }
 
 /// Waits for the next frame, failing on anything else.
@@ -73,7 +92,13 @@ async fn frame_for(c: &mut Client, g: Gaze) -> (FrameHeader, Vec<u8>) {
     c.gaze(&g).await.unwrap();
     loop {
         let (h, img) = next_frame(c).await;
-        c.ack(&Ack { frame: h.frame, t_ms: None, dropped: false }).await.unwrap();
+        c.ack(&Ack {
+            frame: h.frame,
+            t_ms: None,
+            dropped: false,
+        })
+        .await
+        .unwrap();
         if h.seq == Some(g.seq) {
             return (h, img);
         }
@@ -88,22 +113,38 @@ async fn two_sessions_each_get_frames_that_answer_their_own_gaze() {
     let wa = a.hello(&hello(96, 64)).await.unwrap();
     let wb = b.hello(&hello(80, 80)).await.unwrap();
     assert_ne!(wa.session, wb.session);
-    assert_eq!(wa.limits, fovea::protocol::Limits::default(), "welcome states the limits");
+    assert_eq!(
+        wa.limits,
+        fovea::protocol::Limits::default(),
+        "welcome states the limits"
+    );
     let (mut frames_a, mut frames_b) = (0, 0);
     for seq in 1..=4u64 {
         let t = seq as f64 / 5.0;
         let (ha, ia) = frame_for(&mut a, gaze(seq, t, 0.5)).await;
         let (hb, ib) = frame_for(&mut b, gaze(100 + seq, 0.5, t)).await;
         assert_eq!(ha.seq, Some(seq));
-        assert_eq!((ha.gaze.x, ha.gaze.y), (t as f32 as f64, 0.5), "marker at the gaze used");
-        assert_eq!(ha.t_ms, Some(seq as f64 * 4.0), "the sample's own time is echoed");
+        assert_eq!(
+            (ha.gaze.x, ha.gaze.y),
+            (t as f32 as f64, 0.5),
+            "marker at the gaze used"
+        );
+        assert_eq!(
+            ha.t_ms,
+            Some(seq as f64 * 4.0),
+            "the sample's own time is echoed"
+        );
         assert_eq!(hb.seq, Some(100 + seq));
         let da = image::load_from_memory(&ia).unwrap();
         let db = image::load_from_memory(&ib).unwrap();
         assert_eq!((da.width(), da.height()), (96, 64));
         assert_eq!((db.width(), db.height()), (80, 80));
         assert!(ha.stages_ms.render > 0.0 && ha.stages_ms.encode > 0.0);
-        assert!(ha.sampled > 0.0 && ha.sampled <= 1.0, "sampled {}", ha.sampled);
+        assert!(
+            ha.sampled > 0.0 && ha.sampled <= 1.0,
+            "sampled {}",
+            ha.sampled
+        );
         frames_a += 1;
         frames_b += 1;
     }
@@ -119,13 +160,21 @@ async fn bad_input_gets_an_error_and_leaves_both_sessions_working() {
     good.hello(&hello(64, 48)).await.unwrap();
 
     // Before hello.
-    bad.send_text(r#"{"type":"gaze","seq":1,"t_ms":0,"x":0.5,"y":0.5}"#).await.unwrap();
+    bad.send_text(r#"{"type":"gaze","seq":1,"t_ms":0,"x":0.5,"y":0.5}"#)
+        .await
+        .unwrap();
     assert_eq!(next_error(&mut bad).await, ErrorCode::NoHello);
-    bad.send_text(r#"{"type":"hello","scene":"teapot"}"#).await.unwrap();
+    bad.send_text(r#"{"type":"hello","scene":"teapot"}"#)
+        .await
+        .unwrap();
     assert_eq!(next_error(&mut bad).await, ErrorCode::UnknownScene);
-    bad.send_text(r#"{"type":"hello","preset":"ultra"}"#).await.unwrap();
+    bad.send_text(r#"{"type":"hello","preset":"ultra"}"#)
+        .await
+        .unwrap();
     assert_eq!(next_error(&mut bad).await, ErrorCode::UnknownPreset);
-    bad.send_text(r#"{"type":"hello","width":0,"height":48}"#).await.unwrap();
+    bad.send_text(r#"{"type":"hello","width":0,"height":48}"#)
+        .await
+        .unwrap();
     assert_eq!(next_error(&mut bad).await, ErrorCode::OutOfRange);
     // A valid hello still works after the refused ones.
     bad.hello(&hello(64, 48)).await.unwrap();
@@ -133,11 +182,26 @@ async fn bad_input_gets_an_error_and_leaves_both_sessions_working() {
         ("definitely not json", ErrorCode::BadJson),
         (r#"{"type":"warp"}"#, ErrorCode::UnknownType),
         (r#"{"seq":1}"#, ErrorCode::MissingType),
-        (r#"{"type":"gaze","seq":2,"t_ms":0,"x":0.5}"#, ErrorCode::BadField),
-        (r#"{"type":"gaze","seq":2,"t_ms":0,"x":NaN,"y":0.5}"#, ErrorCode::NotFinite),
-        (r#"{"type":"gaze","seq":2,"t_ms":0,"x":Infinity,"y":0.5}"#, ErrorCode::NotFinite),
-        (r#"{"type":"gaze","seq":2,"t_ms":0,"x":1.5,"y":0.5}"#, ErrorCode::OutOfRange),
-        (r#"{"type":"gaze","seq":2,"t_ms":0,"x":0.5,"y":0.5,"pupil_mm":12}"#, ErrorCode::OutOfRange),
+        (
+            r#"{"type":"gaze","seq":2,"t_ms":0,"x":0.5}"#,
+            ErrorCode::BadField,
+        ),
+        (
+            r#"{"type":"gaze","seq":2,"t_ms":0,"x":NaN,"y":0.5}"#,
+            ErrorCode::NotFinite,
+        ),
+        (
+            r#"{"type":"gaze","seq":2,"t_ms":0,"x":Infinity,"y":0.5}"#,
+            ErrorCode::NotFinite,
+        ),
+        (
+            r#"{"type":"gaze","seq":2,"t_ms":0,"x":1.5,"y":0.5}"#,
+            ErrorCode::OutOfRange,
+        ),
+        (
+            r#"{"type":"gaze","seq":2,"t_ms":0,"x":0.5,"y":0.5,"pupil_mm":12}"#,
+            ErrorCode::OutOfRange,
+        ),
         (r#"{"type":"ack","frame":999}"#, ErrorCode::BadAck),
         (r#"{"type":"hello"}"#, ErrorCode::AlreadyStarted),
     ];
@@ -148,7 +212,12 @@ async fn bad_input_gets_an_error_and_leaves_both_sessions_working() {
         let (h, _) = frame_for(&mut good, gaze(7, 0.3, 0.3)).await;
         assert_eq!(h.seq, Some(7));
     }
-    bad.send_text(&format!(r#"{{"type":"gaze","pad":"{}"}}"#, "x".repeat(10_000))).await.unwrap();
+    bad.send_text(&format!(
+        r#"{{"type":"gaze","pad":"{}"}}"#,
+        "x".repeat(10_000)
+    ))
+    .await
+    .unwrap();
     assert_eq!(next_error(&mut bad).await, ErrorCode::TooLarge);
     bad.send_binary(vec![1, 2, 3]).await.unwrap();
     assert_eq!(next_error(&mut bad).await, ErrorCode::UnexpectedBinary);
@@ -163,7 +232,12 @@ async fn bad_input_gets_an_error_and_leaves_both_sessions_working() {
 async fn credits_pace_frames_and_newest_gaze_wins() {
     let server = Server::start().await;
     let mut c = server.client().await;
-    c.hello(&Hello { max_in_flight: 1, ..hello(48, 48) }).await.unwrap();
+    c.hello(&Hello {
+        max_in_flight: 1,
+        ..hello(48, 48)
+    })
+    .await
+    .unwrap();
     // The first frame comes without any gaze; then the only credit is spent.
     let (first, _) = next_frame(&mut c).await;
     assert_eq!((first.frame, first.seq), (1, None));
@@ -175,7 +249,13 @@ async fn credits_pace_frames_and_newest_gaze_wins() {
         Err(fovea::client::ClientError::Timeout(_)) => {}
         other => panic!("a client without credit got {other:?}"),
     }
-    c.ack(&Ack { frame: 1, t_ms: Some(1.0), dropped: false }).await.unwrap();
+    c.ack(&Ack {
+        frame: 1,
+        t_ms: Some(1.0),
+        dropped: false,
+    })
+    .await
+    .unwrap();
     let (second, _) = next_frame(&mut c).await;
     // Samples 1..49 were coalesced: the frame answers the newest one.
     assert_eq!((second.frame, second.seq), (2, Some(50)));
@@ -186,7 +266,13 @@ async fn credits_pace_frames_and_newest_gaze_wins() {
 async fn png_frames_are_exactly_the_rendered_pixels() {
     let server = Server::start().await;
     let mut c = server.client().await;
-    c.hello(&Hello { codec: Codec::Png, preset: "full".into(), ..hello(72, 40) }).await.unwrap();
+    c.hello(&Hello {
+        codec: Codec::Png,
+        preset: "full".into(),
+        ..hello(72, 40)
+    })
+    .await
+    .unwrap();
     let (h, png) = frame_for(&mut c, gaze(3, 0.25, 0.75)).await;
     assert_eq!(h.codec, Codec::Png);
     let streamed = image::load_from_memory(&png).unwrap().to_rgba8().into_raw();
@@ -194,7 +280,10 @@ async fn png_frames_are_exactly_the_rendered_pixels() {
     req.gaze = [0.25, 0.75];
     req.marker = true;
     let direct = Renderer::new().unwrap().render(&req).unwrap().rgba;
-    assert!(streamed == direct, "PNG frame differs from a direct render of the same request");
+    assert!(
+        streamed == direct,
+        "PNG frame differs from a direct render of the same request"
+    );
     server.stop().await;
 }
 
@@ -204,21 +293,54 @@ async fn settings_change_the_sampling_live_and_bad_settings_are_refused() {
     let mut c = server.client().await;
     // Large enough that the periphery is finer than the eye resolves (at 96×72 on a 53 cm
     // display every pixel is coarser than the fovea's MAR, and every pixel is needed).
-    let w = c.hello(&Hello { preset: "full".into(), ..hello(320, 240) }).await.unwrap();
-    assert!(w.presets.iter().any(|p| p == "balanced") && w.presets.iter().any(|p| p == "reference"));
+    let w = c
+        .hello(&Hello {
+            preset: "full".into(),
+            ..hello(320, 240)
+        })
+        .await
+        .unwrap();
+    assert!(
+        w.presets.iter().any(|p| p == "balanced") && w.presets.iter().any(|p| p == "reference")
+    );
     let (h, _) = frame_for(&mut c, gaze(1, 0.5, 0.5)).await;
     assert_eq!(h.sampled, 1.0, "full shades every pixel");
-    c.send_text(r#"{"type":"settings","preset":"fast"}"#).await.unwrap();
+    c.send_text(r#"{"type":"settings","preset":"fast"}"#)
+        .await
+        .unwrap();
     let (h, _) = frame_for(&mut c, gaze(2, 0.5, 0.5)).await;
-    assert!(h.sampled > 0.0 && h.sampled < 0.5, "fast shades a fraction: {}", h.sampled);
-    c.send_text(r#"{"type":"settings","min_probability":1.0}"#).await.unwrap();
+    assert!(
+        h.sampled > 0.0 && h.sampled < 0.5,
+        "fast shades a fraction: {}",
+        h.sampled
+    );
+    c.send_text(r#"{"type":"settings","min_probability":1.0}"#)
+        .await
+        .unwrap();
     let (h3, _) = frame_for(&mut c, gaze(3, 0.5, 0.5)).await;
-    assert!(h3.sampled > h.sampled, "ξ = 1 shades every covered pixel: {} vs {}", h3.sampled, h.sampled);
+    assert!(
+        h3.sampled > h.sampled,
+        "ξ = 1 shades every covered pixel: {} vs {}",
+        h3.sampled,
+        h.sampled
+    );
     let cases: &[(&str, ErrorCode)] = &[
-        (r#"{"type":"settings","preset":"ultra"}"#, ErrorCode::UnknownPreset),
-        (r#"{"type":"settings","mar_slope":-1}"#, ErrorCode::OutOfRange),
-        (r#"{"type":"settings","min_probability":2}"#, ErrorCode::OutOfRange),
-        (r#"{"type":"settings","warp_drive":true}"#, ErrorCode::BadField),
+        (
+            r#"{"type":"settings","preset":"ultra"}"#,
+            ErrorCode::UnknownPreset,
+        ),
+        (
+            r#"{"type":"settings","mar_slope":-1}"#,
+            ErrorCode::OutOfRange,
+        ),
+        (
+            r#"{"type":"settings","min_probability":2}"#,
+            ErrorCode::OutOfRange,
+        ),
+        (
+            r#"{"type":"settings","warp_drive":true}"#,
+            ErrorCode::BadField,
+        ),
         (r#"{"type":"settings","noise":"pink"}"#, ErrorCode::BadField),
     ];
     for (text, code) in cases {
@@ -232,7 +354,9 @@ async fn settings_change_the_sampling_live_and_bad_settings_are_refused() {
 
 async fn http_get(addr: SocketAddr, path: &str) -> String {
     let mut s = tokio::net::TcpStream::connect(addr).await.unwrap();
-    s.write_all(format!("GET {path} HTTP/1.1\r\nHost: x\r\nConnection: close\r\n\r\n").as_bytes()).await.unwrap();
+    s.write_all(format!("GET {path} HTTP/1.1\r\nHost: x\r\nConnection: close\r\n\r\n").as_bytes())
+        .await
+        .unwrap();
     let mut out = String::new();
     s.read_to_string(&mut out).await.unwrap();
     out
@@ -242,12 +366,20 @@ async fn http_get(addr: SocketAddr, path: &str) -> String {
 async fn page_health_and_shutdown() {
     let server = Server::start().await;
     let health = http_get(server.addr, "/healthz").await;
-    assert!(health.starts_with("HTTP/1.1 200") && health.ends_with("ok\n"), "{health}");
+    assert!(
+        health.starts_with("HTTP/1.1 200") && health.ends_with("ok\n"),
+        "{health}"
+    );
     let page = http_get(server.addr, "/").await;
-    assert!(page.starts_with("HTTP/1.1 200") && page.contains("<canvas"), "{page}");
+    assert!(
+        page.starts_with("HTTP/1.1 200") && page.contains("<canvas"),
+        "{page}"
+    );
     let js = http_get(server.addr, "/app.js").await;
     assert!(js.contains("content-type: text/javascript"), "{js}");
-    assert!(http_get(server.addr, "/nope").await.starts_with("HTTP/1.1 404"));
+    assert!(http_get(server.addr, "/nope")
+        .await
+        .starts_with("HTTP/1.1 404"));
 
     let mut c = server.client().await;
     c.hello(&hello(32, 32)).await.unwrap();
@@ -260,6 +392,14 @@ async fn page_health_and_shutdown() {
             Err(e) => panic!("expected a close frame, got {e}"),
         }
     };
-    assert_eq!(close.map(|(code, _)| code), Some(1001), "sessions are told the server is going away");
-    tokio::time::timeout(WAIT, server.task).await.expect("server stops").unwrap().unwrap();
+    assert_eq!(
+        close.map(|(code, _)| code),
+        Some(1001),
+        "sessions are told the server is going away"
+    );
+    tokio::time::timeout(WAIT, server.task)
+        .await
+        .expect("server stops")
+        .unwrap()
+        .unwrap();
 }

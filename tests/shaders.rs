@@ -8,9 +8,12 @@ fn every_shader_parses_and_validates() {
         let source = source.as_str();
         let module = naga::front::wgsl::parse_str(source)
             .unwrap_or_else(|e| panic!("{name} does not parse:\n{}", e.emit_to_string(source)));
-        naga::valid::Validator::new(naga::valid::ValidationFlags::all(), naga::valid::Capabilities::all())
-            .validate(&module)
-            .unwrap_or_else(|e| panic!("{name} does not validate: {e:?}"));
+        naga::valid::Validator::new(
+            naga::valid::ValidationFlags::all(),
+            naga::valid::Capabilities::all(),
+        )
+        .validate(&module)
+        .unwrap_or_else(|e| panic!("{name} does not validate: {e:?}"));
     }
 }
 
@@ -25,5 +28,8 @@ fn every_file_in_shaders_dir_is_registered() {
     on_disk.sort();
     let mut registered: Vec<String> = shaders().iter().map(|(n, _)| n.to_string()).collect();
     registered.sort();
-    assert_eq!(on_disk, registered, "add new shaders to render::pass::shaders() so they are validated");
+    assert_eq!(
+        on_disk, registered,
+        "add new shaders to render::pass::shaders() so they are validated"
+    );
 }

@@ -22,7 +22,8 @@ fn request(scene: &str, w: u32, h: u32, rung: Rung, stream: u64) -> FrameRequest
 
 fn render(r: &mut Renderer, req: &FrameRequest) -> Inspection {
     r.render(req).unwrap();
-    r.inspect(req.stream, &req.scene, req.width, req.height).unwrap()
+    r.inspect(req.stream, &req.scene, req.width, req.height)
+        .unwrap()
 }
 
 /// Mean relative difference over covered pixels (brightness-weighted so dark pixels do not dominate).
@@ -45,8 +46,13 @@ fn brute_force_dipole_on_the_gpu_matches_the_cpu_sum() {
     let (w, h) = (96, 72);
     let scene = Scene::builtin("bunny-marble").unwrap();
     let img = render(&mut r, &request("bunny-marble", w, h, Rung::BruteForce, 1));
-    assert!(!img.photons.is_empty() && img.photons.iter().filter(|p| p[7] > 0.0).count() > 500, "photons were generated");
-    let Material::Translucent { dipole, eta, .. } = &scene.materials[0].1 else { panic!("marble is translucent") };
+    assert!(
+        !img.photons.is_empty() && img.photons.iter().filter(|p| p[7] > 0.0).count() > 500,
+        "photons were generated"
+    );
+    let Material::Translucent { dipole, eta, .. } = &scene.materials[0].1 else {
+        panic!("marble is translucent")
+    };
     let cam = scene.file.camera;
     let view_proj = cam.view_proj(w, h);
     let inv = view_proj.inverse();
@@ -74,9 +80,13 @@ fn brute_force_dipole_on_the_gpu_matches_the_cpu_sum() {
         }
         let ft = fresnel_transmittance(*eta, f64::from(Vec3::new(nd[0], nd[1], nd[2]).dot(-ray)));
         for c in 0..3 {
-            let expected = sum[c] * ft + albedo[c] * f64::from(light[c]) * f64::from(scene.file.ambient);
+            let expected =
+                sum[c] * ft + albedo[c] * f64::from(light[c]) * f64::from(scene.file.ambient);
             let got = f64::from(img.color[k][c]);
-            assert!((got - expected).abs() <= 2e-3 * expected.max(1e-3), "pixel {k} channel {c}: GPU {got}, CPU {expected}");
+            assert!(
+                (got - expected).abs() <= 2e-3 * expected.max(1e-3),
+                "pixel {k} channel {c}: GPU {got}, CPU {expected}"
+            );
         }
         checked += 1;
     }
@@ -92,7 +102,10 @@ fn hierarchy_cut_at_the_leaves_equals_brute_force_and_error_grows_as_the_cut_ris
     leaves.settings.translucency.cut_level = 0;
     leaves.settings.translucency.cut_epsilon = 0.0;
     let at_leaves = relative_difference(&render(&mut r, &leaves), &brute);
-    assert!(at_leaves < 1e-4, "cut at the leaves differs from brute force by {at_leaves}");
+    assert!(
+        at_leaves < 1e-4,
+        "cut at the leaves differs from brute force by {at_leaves}"
+    );
     let mut errors = Vec::new();
     for level in 0..=4 {
         let mut q = request("bunny-marble", w, h, Rung::Hierarchical, 10 + level);
@@ -101,11 +114,23 @@ fn hierarchy_cut_at_the_leaves_equals_brute_force_and_error_grows_as_the_cut_ris
         errors.push(relative_difference(&render(&mut r, &q), &brute));
     }
     for pair in errors.windows(2) {
-        assert!(pair[1] + 1e-6 >= pair[0], "error must not fall as the cut rises: {errors:?}");
+        assert!(
+            pair[1] + 1e-6 >= pair[0],
+            "error must not fall as the cut rises: {errors:?}"
+        );
     }
-    assert!(errors[4] > 10.0 * errors[0].max(1e-5), "a coarse cut is visibly worse: {errors:?}");
+    assert!(
+        errors[4] > 10.0 * errors[0].max(1e-5),
+        "a coarse cut is visibly worse: {errors:?}"
+    );
     // The default cut (ε = 0.5 from the leaves) stays within 2% of the reference.
-    let default = relative_difference(&render(&mut r, &request("bunny-marble", w, h, Rung::Hierarchical, 20)), &brute);
+    let default = relative_difference(
+        &render(
+            &mut r,
+            &request("bunny-marble", w, h, Rung::Hierarchical, 20),
+        ),
+        &brute,
+    );
     assert!(default < 0.02, "default cut error {default}");
 }
 
@@ -127,12 +152,22 @@ fn no_rung_makes_a_white_non_absorbing_medium_brighter_than_the_light() {
     r.add_scene(scene);
     for (i, rung) in Rung::ALL.iter().enumerate() {
         let img = render(&mut r, &request(&name, 96, 72, *rung, i as u64 + 1));
-        let brightest = img.color.iter().flat_map(|c| [c[0], c[1], c[2]]).fold(0.0f32, f32::max);
+        let brightest = img
+            .color
+            .iter()
+            .flat_map(|c| [c[0], c[1], c[2]])
+            .fold(0.0f32, f32::max);
         // Unit irradiance plus the ambient fraction is all the light there is; 3% for the
         // photon clusters of concave parts seeing each other through the bunny (occlusion
         // inside the object is ignored, as in seed 000).
-        assert!(brightest <= (1.0 + ambient) * 1.03, "{rung:?}: brightest pixel {brightest}");
-        assert!(brightest > 0.3, "{rung:?}: the lit side is lit ({brightest})");
+        assert!(
+            brightest <= (1.0 + ambient) * 1.03,
+            "{rung:?}: brightest pixel {brightest}"
+        );
+        assert!(
+            brightest > 0.3,
+            "{rung:?}: the lit side is lit ({brightest})"
+        );
     }
 }
 
@@ -172,11 +207,20 @@ fn every_rung_composes_with_foveation() {
         fov.settings.foveation.min_probability = 1.0;
         let all = render(&mut r, &fov);
         let d = relative_difference(&all, &full);
-        assert!(d < 1e-6, "{rung:?}: foveated with every pixel sampled differs from full by {d}");
+        assert!(
+            d < 1e-6,
+            "{rung:?}: foveated with every pixel sampled differs from full by {d}"
+        );
         fov.settings.foveation.min_probability = 0.05;
         fov.stream += 1000;
         let sparse = render(&mut r, &fov);
-        assert!(sparse.resolved.iter().all(|c| c.iter().all(|v| v.is_finite())), "{rung:?}: finite");
+        assert!(
+            sparse
+                .resolved
+                .iter()
+                .all(|c| c.iter().all(|v| v.is_finite())),
+            "{rung:?}: finite"
+        );
     }
 }
 
@@ -186,11 +230,21 @@ fn explain_prints_the_plan() {
         .args(["render", "--scene", "materials", "--explain"])
         .output()
         .unwrap();
-    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
     let text = String::from_utf8_lossy(&out.stdout);
     assert!(text.contains("material \"plaster\": opaque BRDF"), "{text}");
-    assert!(text.contains("material \"marble\": subsurface scattering"), "{text}");
+    assert!(
+        text.contains("material \"marble\": subsurface scattering"),
+        "{text}"
+    );
     assert!(text.contains("built once"), "{text}");
-    let out = std::process::Command::new(env!("CARGO_BIN_EXE_fovea")).args(["render", "--scene", "opaque", "--explain"]).output().unwrap();
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_fovea"))
+        .args(["render", "--scene", "opaque", "--explain"])
+        .output()
+        .unwrap();
     assert!(String::from_utf8_lossy(&out.stdout).contains("photon pass: off"));
 }

@@ -16,7 +16,12 @@ pub struct BenchConfig {
 
 impl BenchConfig {
     fn preset(name: &str) -> Option<BenchConfig> {
-        Some(BenchConfig { name: name.to_string(), settings: Settings::preset(name)?, codec: Codec::Jpeg, quality: 85 })
+        Some(BenchConfig {
+            name: name.to_string(),
+            settings: Settings::preset(name)?,
+            codec: Codec::Jpeg,
+            quality: 85,
+        })
     }
 
     fn variant(name: String, tweak: impl FnOnce(&mut Settings)) -> BenchConfig {
@@ -37,32 +42,67 @@ impl BenchConfig {
 /// probability form, saliency, reprojection, reconstruction, noise, compaction) and the
 /// encoder. Any other value is a comma-separated list of names from `knobs`.
 pub fn sweep(which: &str) -> Result<Vec<BenchConfig>, String> {
-    let presets: Vec<BenchConfig> = crate::foveation::PRESETS.iter().filter_map(|p| BenchConfig::preset(p)).collect();
+    let presets: Vec<BenchConfig> = crate::foveation::PRESETS
+        .iter()
+        .filter_map(|p| BenchConfig::preset(p))
+        .collect();
     let mut rungs = Vec::new();
     for rung in [Rung::Opaque, Rung::NormalBlur, Rung::Screen] {
-        let name = serde_json::to_value(rung).ok().and_then(|v| v.as_str().map(str::to_string)).unwrap_or_default();
-        rungs.push(BenchConfig::variant_of("full", format!("full {name}"), |s| s.translucency.rung = rung));
+        let name = serde_json::to_value(rung)
+            .ok()
+            .and_then(|v| v.as_str().map(str::to_string))
+            .unwrap_or_default();
+        rungs.push(BenchConfig::variant_of(
+            "full",
+            format!("full {name}"),
+            |s| s.translucency.rung = rung,
+        ));
     }
     for level in 1..=4u32 {
-        rungs.push(BenchConfig::variant_of("full", format!("full cut-level {level}"), |s| s.translucency.cut_level = level));
+        rungs.push(BenchConfig::variant_of(
+            "full",
+            format!("full cut-level {level}"),
+            |s| s.translucency.cut_level = level,
+        ));
     }
     for eps in [0.25f32, 1.0, 2.0] {
-        rungs.push(BenchConfig::variant_of("full", format!("full cut-ε {eps}"), |s| s.translucency.cut_epsilon = eps));
+        rungs.push(BenchConfig::variant_of(
+            "full",
+            format!("full cut-ε {eps}"),
+            |s| s.translucency.cut_epsilon = eps,
+        ));
     }
     let mut knobs = presets.clone();
     knobs.extend(rungs.iter().cloned());
     for m in [0.015f32, 0.034, 0.05] {
-        knobs.push(BenchConfig::variant(format!("balanced m={m}"), |s| s.foveation.mar_slope = m));
+        knobs.push(BenchConfig::variant(format!("balanced m={m}"), |s| {
+            s.foveation.mar_slope = m
+        }));
     }
     for xi in [0.01f32, 0.02, 0.1, 0.2] {
-        knobs.push(BenchConfig::variant(format!("balanced ξ={xi}"), |s| s.foveation.min_probability = xi));
+        knobs.push(BenchConfig::variant(format!("balanced ξ={xi}"), |s| {
+            s.foveation.min_probability = xi
+        }));
     }
-    knobs.push(BenchConfig::variant("balanced linear-p".into(), |s| s.foveation.probability = ProbabilityForm::Linear));
-    knobs.push(BenchConfig::variant("balanced no-saliency".into(), |s| s.foveation.saliency = false));
-    knobs.push(BenchConfig::variant("balanced no-reprojection".into(), |s| s.foveation.reprojection = false));
-    knobs.push(BenchConfig::variant("balanced nearest".into(), |s| s.foveation.reconstruction = Reconstruction::Nearest));
-    knobs.push(BenchConfig::variant("balanced white-noise".into(), |s| s.foveation.noise = Noise::White));
-    knobs.push(BenchConfig::variant("balanced no-compaction".into(), |s| s.foveation.compaction = false));
+    knobs.push(BenchConfig::variant("balanced linear-p".into(), |s| {
+        s.foveation.probability = ProbabilityForm::Linear
+    }));
+    knobs.push(BenchConfig::variant("balanced no-saliency".into(), |s| {
+        s.foveation.saliency = false
+    }));
+    knobs.push(BenchConfig::variant(
+        "balanced no-reprojection".into(),
+        |s| s.foveation.reprojection = false,
+    ));
+    knobs.push(BenchConfig::variant("balanced nearest".into(), |s| {
+        s.foveation.reconstruction = Reconstruction::Nearest
+    }));
+    knobs.push(BenchConfig::variant("balanced white-noise".into(), |s| {
+        s.foveation.noise = Noise::White
+    }));
+    knobs.push(BenchConfig::variant("balanced no-compaction".into(), |s| {
+        s.foveation.compaction = false
+    }));
     for q in [50u8, 95] {
         let mut c = BenchConfig::preset("balanced").expect("balanced is a preset");
         c.quality = q;
@@ -75,7 +115,11 @@ pub fn sweep(which: &str) -> Result<Vec<BenchConfig>, String> {
     knobs.push(png);
     match which {
         "presets" => Ok(presets),
-        "rungs" => Ok(presets.into_iter().filter(|c| c.name == "full" || c.name == "reference").chain(rungs).collect()),
+        "rungs" => Ok(presets
+            .into_iter()
+            .filter(|c| c.name == "full" || c.name == "reference")
+            .chain(rungs)
+            .collect()),
         "knobs" => Ok(knobs),
         list => list
             .split(',')
@@ -101,6 +145,8 @@ mod tests {
         names.dedup();
         assert_eq!(names.len(), k.len());
         assert_eq!(super::sweep("full,fast").unwrap().len(), 2);
-        assert!(super::sweep("full,nonsense").unwrap_err().contains("nonsense"));
+        assert!(super::sweep("full,nonsense")
+            .unwrap_err()
+            .contains("nonsense"));
     }
 }

@@ -19,7 +19,9 @@ fn median(mut v: Vec<f64>) -> f64 {
 }
 
 fn escape(s: &str) -> String {
-    s.replace('&', "&amp;").replace('<', "&lt;").replace('>', "&gt;")
+    s.replace('&', "&amp;")
+        .replace('<', "&lt;")
+        .replace('>', "&gt;")
 }
 
 /// "Nice" tick positions covering [lo, hi].
@@ -27,7 +29,11 @@ fn ticks(lo: f64, hi: f64) -> Vec<f64> {
     let span = (hi - lo).max(1e-12);
     let raw = span / 5.0;
     let mag = 10f64.powf(raw.log10().floor());
-    let step = [1.0, 2.0, 5.0, 10.0].iter().map(|m| m * mag).find(|s| span / s <= 6.0).unwrap_or(10.0 * mag);
+    let step = [1.0, 2.0, 5.0, 10.0]
+        .iter()
+        .map(|m| m * mag)
+        .find(|s| span / s <= 6.0)
+        .unwrap_or(10.0 * mag);
     let mut t = (lo / step).ceil() * step;
     let mut out = Vec::new();
     while t <= hi + 1e-9 {
@@ -44,7 +50,11 @@ pub fn svg(report: &BenchReport) -> String {
     for r in &report.records {
         let e = by_config.entry(r.config.clone()).or_insert_with(|| {
             order.push(r.config.clone());
-            (Vec::new(), Vec::new(), crate::foveation::PRESETS.contains(&r.config.as_str()))
+            (
+                Vec::new(),
+                Vec::new(),
+                crate::foveation::PRESETS.contains(&r.config.as_str()),
+            )
         });
         e.0.push(r.frame_ms.median);
         e.1.push(r.errors.flip);
@@ -70,12 +80,17 @@ pub fn svg(report: &BenchReport) -> String {
         s.push_str("<text x=\"100\" y=\"200\">no measurements</text></svg>\n");
         return s;
     }
-    let (tmax, fmax) = points.iter().fold((0.0f64, 0.0f64), |(a, b), p| (a.max(p.1), b.max(p.2)));
+    let (tmax, fmax) = points
+        .iter()
+        .fold((0.0f64, 0.0f64), |(a, b), p| (a.max(p.1), b.max(p.2)));
     let (tmax, fmax) = (tmax * 1.1 + 1e-9, fmax * 1.15 + 1e-4);
     let (pw, ph) = (W - LEFT - RIGHT, H - TOP - BOTTOM);
     let x = |t: f64| LEFT + t / tmax * pw;
     let y = |f: f64| TOP + ph - f / fmax * ph;
-    let _ = writeln!(s, r##"<rect x="{LEFT}" y="{TOP}" width="{pw}" height="{ph}" fill="none" stroke="#444"/>"##);
+    let _ = writeln!(
+        s,
+        r##"<rect x="{LEFT}" y="{TOP}" width="{pw}" height="{ph}" fill="none" stroke="#444"/>"##
+    );
     for t in ticks(0.0, tmax) {
         let _ = writeln!(
             s,
@@ -113,8 +128,15 @@ pub fn svg(report: &BenchReport) -> String {
     let coords: Vec<(f64, f64)> = points.iter().map(|p| (p.1, p.2)).collect();
     let mut front: Vec<usize> = pareto_front(&coords);
     front.sort_by(|&a, &b| coords[a].0.total_cmp(&coords[b].0));
-    let path: Vec<String> = front.iter().map(|&i| format!("{:.1},{:.1}", x(coords[i].0), y(coords[i].1))).collect();
-    let _ = writeln!(s, r##"<polyline points="{}" fill="none" stroke="#d62728" stroke-width="2" stroke-dasharray="6 4"/>"##, path.join(" "));
+    let path: Vec<String> = front
+        .iter()
+        .map(|&i| format!("{:.1},{:.1}", x(coords[i].0), y(coords[i].1)))
+        .collect();
+    let _ = writeln!(
+        s,
+        r##"<polyline points="{}" fill="none" stroke="#d62728" stroke-width="2" stroke-dasharray="6 4"/>"##,
+        path.join(" ")
+    );
     for (i, (name, t, f, preset)) in points.iter().enumerate() {
         let on_front = front.contains(&i);
         let colour = if *preset { "#1f77b4" } else { "#7f7f7f" };
@@ -131,18 +153,31 @@ pub fn svg(report: &BenchReport) -> String {
             f
         );
         if *preset {
-            let _ = writeln!(s, r#"<text x="{:.1}" y="{:.1}" font-weight="bold">{}</text>"#, x(*t) + 8.0, y(*f) - 6.0, escape(name));
+            let _ = writeln!(
+                s,
+                r#"<text x="{:.1}" y="{:.1}" font-weight="bold">{}</text>"#,
+                x(*t) + 8.0,
+                y(*f) - 6.0,
+                escape(name)
+            );
         }
     }
     // Legend: every configuration, so grey points can be identified.
     let lx = W - RIGHT + 15.0;
-    let _ = writeln!(s, r#"<text x="{lx}" y="{TOP}" font-weight="bold">configurations</text>"#);
+    let _ = writeln!(
+        s,
+        r#"<text x="{lx}" y="{TOP}" font-weight="bold">configurations</text>"#
+    );
     for (i, (name, t, f, preset)) in points.iter().enumerate() {
         let _ = writeln!(
             s,
             r#"<text x="{lx}" y="{:.1}" font-size="10"{}>{}{} — {:.1} ms, {:.3}</text>"#,
             TOP + 16.0 + 13.0 * i as f64,
-            if *preset { r#" font-weight="bold""# } else { "" },
+            if *preset {
+                r#" font-weight="bold""#
+            } else {
+                ""
+            },
             if front.contains(&i) { "★ " } else { "" },
             escape(name),
             t,

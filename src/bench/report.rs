@@ -22,11 +22,19 @@ impl Spread {
     pub fn of(values: &[f64]) -> Spread {
         let mut v: Vec<f64> = values.iter().copied().filter(|x| !x.is_nan()).collect();
         if v.is_empty() {
-            return Spread { median: f64::NAN, p10: f64::NAN, p90: f64::NAN };
+            return Spread {
+                median: f64::NAN,
+                p10: f64::NAN,
+                p90: f64::NAN,
+            };
         }
         v.sort_by(|a, b| a.total_cmp(b));
         let at = |q: f64| v[((q * (v.len() - 1) as f64).round() as usize).min(v.len() - 1)];
-        Spread { median: at(0.5), p10: at(0.1), p90: at(0.9) }
+        Spread {
+            median: at(0.5),
+            p10: at(0.1),
+            p90: at(0.9),
+        }
     }
 }
 
@@ -73,11 +81,14 @@ impl Machine {
         Machine {
             adapter: renderer.adapter(),
             timing: if renderer.timestamps() {
-                "GPU timestamp queries per pass; frame time is wall clock from submit to GPU idle".into()
+                "GPU timestamp queries per pass; frame time is wall clock from submit to GPU idle"
+                    .into()
             } else {
                 "no timestamp queries on this adapter: frame time (wall clock, submit to GPU idle) only".into()
             },
-            cpus: std::thread::available_parallelism().map(|n| n.get()).unwrap_or(1),
+            cpus: std::thread::available_parallelism()
+                .map(|n| n.get())
+                .unwrap_or(1),
             os: format!("{} {}", std::env::consts::OS, std::env::consts::ARCH),
         }
     }
@@ -98,7 +109,12 @@ pub struct BenchReport {
 type GroupKey = (String, u32, u32, [u32; 2]);
 
 fn group_of(r: &BenchRecord) -> GroupKey {
-    (r.scene.clone(), r.width, r.height, [r.gaze[0].to_bits(), r.gaze[1].to_bits()])
+    (
+        r.scene.clone(),
+        r.width,
+        r.height,
+        [r.gaze[0].to_bits(), r.gaze[1].to_bits()],
+    )
 }
 
 /// Indices of the points not dominated by another (lower or equal cost and error, one strictly).
@@ -106,7 +122,10 @@ pub fn pareto_front(points: &[(f64, f64)]) -> Vec<usize> {
     (0..points.len())
         .filter(|&i| {
             let (ci, ei) = points[i];
-            !points.iter().enumerate().any(|(j, &(cj, ej))| j != i && cj <= ci && ej <= ei && (cj < ci || ej < ei))
+            !points
+                .iter()
+                .enumerate()
+                .any(|(j, &(cj, ej))| j != i && cj <= ci && ej <= ei && (cj < ci || ej < ei))
         })
         .collect()
 }
@@ -120,15 +139,22 @@ impl BenchReport {
             groups.entry(k).or_default().push(i);
         }
         for members in groups.values() {
-            let full = members.iter().map(|&i| &self.records[i]).find(|r| r.config == "full").cloned();
-            let points: Vec<(f64, f64)> =
-                members.iter().map(|&i| (self.records[i].frame_ms.median, self.records[i].errors.flip)).collect();
+            let full = members
+                .iter()
+                .map(|&i| &self.records[i])
+                .find(|r| r.config == "full")
+                .cloned();
+            let points: Vec<(f64, f64)> = members
+                .iter()
+                .map(|&i| (self.records[i].frame_ms.median, self.records[i].errors.flip))
+                .collect();
             let front = pareto_front(&points);
             for (slot, &i) in members.iter().enumerate() {
                 let r = &mut self.records[i];
                 if let Some(f) = &full {
                     r.speedup_vs_full = Some(f.frame_ms.median / r.frame_ms.median);
-                    if let (Some(a), Some(b)) = (f.passes_ms.get("shade"), r.passes_ms.get("shade")) {
+                    if let (Some(a), Some(b)) = (f.passes_ms.get("shade"), r.passes_ms.get("shade"))
+                    {
                         r.shade_speedup_vs_full = (*b > 0.0).then(|| a / b);
                     }
                 }
@@ -215,7 +241,14 @@ mod tests {
 
     #[test]
     fn pareto_front_keeps_only_undominated_points() {
-        let pts = [(10.0, 0.0), (5.0, 0.1), (6.0, 0.2), (1.0, 0.5), (1.0, 0.6), (5.0, 0.1)];
+        let pts = [
+            (10.0, 0.0),
+            (5.0, 0.1),
+            (6.0, 0.2),
+            (1.0, 0.5),
+            (1.0, 0.6),
+            (5.0, 0.1),
+        ];
         // (6, 0.2) is dominated by (5, 0.1); (1, 0.6) by (1, 0.5); equal points both stay.
         assert_eq!(pareto_front(&pts), vec![0, 1, 3, 5]);
     }

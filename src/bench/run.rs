@@ -48,15 +48,27 @@ fn gaze_at(start: [f32; 2], moving: bool, frame: u32) -> [f32; 2] {
     }
     // A slow pursuit around the start point: consecutive frames overlap, so history is reused.
     let a = frame as f32 * 0.15;
-    [(start[0] + 0.15 * a.sin()).clamp(0.0, 1.0), (start[1] + 0.1 * (0.7 * a).cos() - 0.1).clamp(0.0, 1.0)]
+    [
+        (start[0] + 0.15 * a.sin()).clamp(0.0, 1.0),
+        (start[1] + 0.1 * (0.7 * a).cos() - 0.1).clamp(0.0, 1.0),
+    ]
 }
 
-pub fn run(renderer: &mut Renderer, opts: &BenchOptions, stop: &AtomicBool, progress: Progress) -> Result<BenchReport, RenderError> {
+pub fn run(
+    renderer: &mut Renderer,
+    opts: &BenchOptions,
+    stop: &AtomicBool,
+    progress: Progress,
+) -> Result<BenchReport, RenderError> {
     let started = Instant::now();
     let groups: Vec<(String, (u32, u32), [f32; 2])> = opts
         .scenes
         .iter()
-        .flat_map(|s| opts.sizes.iter().flat_map(move |z| opts.gazes.iter().map(move |g| (s.clone(), *z, *g))))
+        .flat_map(|s| {
+            opts.sizes
+                .iter()
+                .flat_map(move |z| opts.gazes.iter().map(move |g| (s.clone(), *z, *g)))
+        })
         .collect();
     let per_group = (opts.warmup + opts.frames) as usize * (opts.configs.len() + 1);
     let total = groups.len() * per_group;
@@ -65,7 +77,12 @@ pub fn run(renderer: &mut Renderer, opts: &BenchOptions, stop: &AtomicBool, prog
     let mut interrupted = false;
     let reference = Settings::preset("reference").expect("reference is a preset");
     for (gi, (scene, (w, h), gaze0)) in groups.iter().enumerate() {
-        let viewing = Viewing { width: *w, height: *h, width_cm: opts.display.width_cm, distance_cm: opts.display.distance_cm };
+        let viewing = Viewing {
+            width: *w,
+            height: *h,
+            width_cm: opts.display.width_cm,
+            distance_cm: opts.display.distance_cm,
+        };
         let mut samples: Vec<Samples> = opts.configs.iter().map(|_| Samples::default()).collect();
         let stream_base = 1_000 * (gi as u64 + 1);
         'frames: for f in 0..opts.warmup + opts.frames {
@@ -82,7 +99,10 @@ pub fn run(renderer: &mut Renderer, opts: &BenchOptions, stop: &AtomicBool, prog
             };
             let reference_frame = renderer.render(&request(&reference, stream_base + 999))?;
             done += 1;
-            let gaze_px = [f64::from(gaze[0]) * f64::from(*w), f64::from(gaze[1]) * f64::from(*h)];
+            let gaze_px = [
+                f64::from(gaze[0]) * f64::from(*w),
+                f64::from(gaze[1]) * f64::from(*h),
+            ];
             let weights = Weighting::default();
             for (ci, config) in opts.configs.iter().enumerate() {
                 if stop.load(Ordering::Relaxed) {
@@ -108,7 +128,15 @@ pub fn run(renderer: &mut Renderer, opts: &BenchOptions, stop: &AtomicBool, prog
                 for (k, v) in &frame.passes_ms {
                     s.passes.entry(k.clone()).or_default().push(*v);
                 }
-                s.errors.push(quality::measure(&reference_frame.rgba, &frame.rgba, *w, *h, &viewing, gaze_px, &weights));
+                s.errors.push(quality::measure(
+                    &reference_frame.rgba,
+                    &frame.rgba,
+                    *w,
+                    *h,
+                    &viewing,
+                    gaze_px,
+                    &weights,
+                ));
             }
         }
         for (config, s) in opts.configs.iter().zip(samples) {
@@ -127,7 +155,11 @@ pub fn run(renderer: &mut Renderer, opts: &BenchOptions, stop: &AtomicBool, prog
                 quality: config.quality,
                 frames: s.frame_ms.len(),
                 frame_ms: Spread::of(&s.frame_ms),
-                passes_ms: s.passes.iter().map(|(k, v)| (k.clone(), Spread::of(v).median)).collect(),
+                passes_ms: s
+                    .passes
+                    .iter()
+                    .map(|(k, v)| (k.clone(), Spread::of(v).median))
+                    .collect(),
                 encode_ms: Spread::of(&s.encode_ms),
                 bytes: Spread::of(&s.bytes).median,
                 sampled: Spread::of(&s.sampled).median,

@@ -8,12 +8,17 @@ use tokio::net::TcpStream;
 use tokio_tungstenite::tungstenite::Message;
 use tokio_tungstenite::{MaybeTlsStream, WebSocketStream};
 
-use crate::protocol::{decode_frame, Ack, ErrorMessage, FrameHeader, Gaze, Hello, ServerMessage, Welcome};
+use crate::protocol::{
+    decode_frame, Ack, ErrorMessage, FrameHeader, Gaze, Hello, ServerMessage, Welcome,
+};
 
 #[derive(Debug, thiserror::Error)]
 pub enum ClientError {
     #[error("connecting to {url}: {source}")]
-    Connect { url: String, source: Box<tokio_tungstenite::tungstenite::Error> },
+    Connect {
+        url: String,
+        source: Box<tokio_tungstenite::tungstenite::Error>,
+    },
     #[error("socket: {0}")]
     Socket(#[from] Box<tokio_tungstenite::tungstenite::Error>),
     #[error("server sent a message that does not parse: {0}")]
@@ -31,7 +36,10 @@ pub enum ClientError {
 pub enum Event {
     Welcome(Welcome),
     Error(ErrorMessage),
-    Frame { header: FrameHeader, image: Vec<u8> },
+    Frame {
+        header: FrameHeader,
+        image: Vec<u8>,
+    },
     /// The server closed the socket, with its close code and reason if it gave one.
     Closed(Option<(u16, String)>),
 }
@@ -45,24 +53,34 @@ impl Client {
         // No Nagle: gaze samples and acks are tiny and must leave at once.
         let (ws, _) = tokio_tungstenite::connect_async_with_config(url, None, true)
             .await
-            .map_err(|e| ClientError::Connect { url: url.to_string(), source: Box::new(e) })?;
+            .map_err(|e| ClientError::Connect {
+                url: url.to_string(),
+                source: Box::new(e),
+            })?;
         Ok(Client { ws })
     }
 
     /// Sends raw text: for tests that need to send what a well-behaved client never would.
     pub async fn send_text(&mut self, text: &str) -> Result<(), ClientError> {
-        self.ws.send(Message::Text(text.into())).await.map_err(Box::new)?;
+        self.ws
+            .send(Message::Text(text.into()))
+            .await
+            .map_err(Box::new)?;
         Ok(())
     }
 
     pub async fn send_binary(&mut self, bytes: Vec<u8>) -> Result<(), ClientError> {
-        self.ws.send(Message::Binary(bytes.into())).await.map_err(Box::new)?;
+        self.ws
+            .send(Message::Binary(bytes.into()))
+            .await
+            .map_err(Box::new)?;
         Ok(())
     }
 
     /// Sends `hello` and waits for `welcome`; an `error` reply becomes `ClientError::Refused`.
     pub async fn hello(&mut self, hello: &Hello) -> Result<Welcome, ClientError> {
-        let mut v = serde_json::to_value(hello).map_err(|e| ClientError::BadMessage(e.to_string()))?;
+        let mut v =
+            serde_json::to_value(hello).map_err(|e| ClientError::BadMessage(e.to_string()))?;
         v["type"] = "hello".into();
         self.send_text(&v.to_string()).await?;
         loop {
@@ -76,13 +94,15 @@ impl Client {
     }
 
     pub async fn gaze(&mut self, gaze: &Gaze) -> Result<(), ClientError> {
-        let mut v = serde_json::to_value(gaze).map_err(|e| ClientError::BadMessage(e.to_string()))?;
+        let mut v =
+            serde_json::to_value(gaze).map_err(|e| ClientError::BadMessage(e.to_string()))?;
         v["type"] = "gaze".into();
         self.send_text(&v.to_string()).await
     }
 
     pub async fn ack(&mut self, ack: &Ack) -> Result<(), ClientError> {
-        let mut v = serde_json::to_value(ack).map_err(|e| ClientError::BadMessage(e.to_string()))?;
+        let mut v =
+            serde_json::to_value(ack).map_err(|e| ClientError::BadMessage(e.to_string()))?;
         v["type"] = "ack".into();
         self.send_text(&v.to_string()).await
     }
@@ -104,10 +124,16 @@ impl Client {
                     Err(e) => return Err(ClientError::BadMessage(format!("{e}: {t}"))),
                 },
                 Message::Binary(b) => {
-                    let (header, image) = decode_frame(&b).map_err(|e| ClientError::BadMessage(e.to_string()))?;
-                    Event::Frame { header, image: image.to_vec() }
+                    let (header, image) =
+                        decode_frame(&b).map_err(|e| ClientError::BadMessage(e.to_string()))?;
+                    Event::Frame {
+                        header,
+                        image: image.to_vec(),
+                    }
                 }
-                Message::Close(frame) => Event::Closed(frame.map(|f| (u16::from(f.code), f.reason.to_string()))),
+                Message::Close(frame) => {
+                    Event::Closed(frame.map(|f| (u16::from(f.code), f.reason.to_string())))
+                }
                 Message::Ping(_) | Message::Pong(_) | Message::Frame(_) => continue,
             });
         }

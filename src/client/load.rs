@@ -97,14 +97,22 @@ struct SessionResult {
 
 fn histogram() -> Histogram<u64> {
     // 1 µs to 60 s, 3 significant digits.
-    Histogram::new_with_bounds(1, 60_000_000, 3).unwrap_or_else(|_| Histogram::new(3).expect("valid sigfig"))
+    Histogram::new_with_bounds(1, 60_000_000, 3)
+        .unwrap_or_else(|_| Histogram::new(3).expect("valid sigfig"))
 }
 
 /// Runs the load and merges every session's measurements.
-pub async fn run(opts: &LoadOptions, progress: impl Fn(usize, f64) + Send + Sync + 'static) -> LoadReport {
+pub async fn run(
+    opts: &LoadOptions,
+    progress: impl Fn(usize, f64) + Send + Sync + 'static,
+) -> LoadReport {
     let stage_names = ["latency", "queue", "render", "readback", "encode"];
-    let hists: Arc<Mutex<BTreeMap<String, Histogram<u64>>>> =
-        Arc::new(Mutex::new(stage_names.iter().map(|n| (n.to_string(), histogram())).collect()));
+    let hists: Arc<Mutex<BTreeMap<String, Histogram<u64>>>> = Arc::new(Mutex::new(
+        stage_names
+            .iter()
+            .map(|n| (n.to_string(), histogram()))
+            .collect(),
+    ));
     let timeline = Arc::new(Mutex::new(vec![0u64; opts.duration.as_secs() as usize + 2]));
     let started = Instant::now();
     let deadline = started + opts.duration;
@@ -124,8 +132,14 @@ pub async fn run(opts: &LoadOptions, progress: impl Fn(usize, f64) + Send + Sync
     }
     let seconds = started.elapsed().as_secs_f64();
     let hists = hists.lock().map(|h| h.clone()).unwrap_or_default();
-    let fps: Vec<f64> = results.iter().filter(|r| !r.connect_failed && !r.refused).map(|r| r.frames as f64 / r.active_s.max(1e-9)).collect();
-    let (fps_min, fps_max) = fps.iter().fold((f64::INFINITY, 0.0f64), |(a, b), v| (a.min(*v), b.max(*v)));
+    let fps: Vec<f64> = results
+        .iter()
+        .filter(|r| !r.connect_failed && !r.refused)
+        .map(|r| r.frames as f64 / r.active_s.max(1e-9))
+        .collect();
+    let (fps_min, fps_max) = fps
+        .iter()
+        .fold((f64::INFINITY, 0.0f64), |(a, b), v| (a.min(*v), b.max(*v)));
     let frames: u64 = results.iter().map(|r| r.frames).sum();
     LoadReport {
         sessions: opts.sessions,
@@ -133,14 +147,25 @@ pub async fn run(opts: &LoadOptions, progress: impl Fn(usize, f64) + Send + Sync
         rate_hz: opts.rate_hz,
         frames,
         fps_total: frames as f64 / seconds.max(1e-9),
-        fairness: if fps_max > 0.0 { fps_min / fps_max } else { 0.0 },
+        fairness: if fps_max > 0.0 {
+            fps_min / fps_max
+        } else {
+            0.0
+        },
         fps_min: if fps.is_empty() { 0.0 } else { fps_min },
         fps_max,
         fps_per_session: fps,
         latency_ms: percentiles(&hists["latency"]),
-        stages_ms: hists.iter().filter(|(k, _)| k.as_str() != "latency").map(|(k, h)| (k.clone(), percentiles(h))).collect(),
+        stages_ms: hists
+            .iter()
+            .filter(|(k, _)| k.as_str() != "latency")
+            .map(|(k, h)| (k.clone(), percentiles(h)))
+            .collect(),
         gaze_sent: results.iter().map(|r| r.gaze_sent).sum(),
-        samples_coalesced: results.iter().map(|r| r.gaze_sent.saturating_sub(r.answered)).sum(),
+        samples_coalesced: results
+            .iter()
+            .map(|r| r.gaze_sent.saturating_sub(r.answered))
+            .sum(),
         errors: results.iter().map(|r| r.errors).sum(),
         connection_failures: results.iter().filter(|r| r.connect_failed).count() as u64,
         refused: results.iter().filter(|r| r.refused).count() as u64,
@@ -160,14 +185,19 @@ async fn session(
     progress: Arc<impl Fn(usize, f64) + Send + Sync>,
 ) -> SessionResult {
     let mut result = SessionResult::default();
-    let Ok((ws, _)) = tokio_tungstenite::connect_async_with_config(&opts.url, None, true).await else {
+    let Ok((ws, _)) = tokio_tungstenite::connect_async_with_config(&opts.url, None, true).await
+    else {
         result.connect_failed = true;
         return result;
     };
     let (mut sink, mut stream) = ws.split();
     let mut hello = serde_json::to_value(&opts.hello).unwrap_or_default();
     hello["type"] = "hello".into();
-    if sink.send(Message::Text(hello.to_string().into())).await.is_err() {
+    if sink
+        .send(Message::Text(hello.to_string().into()))
+        .await
+        .is_err()
+    {
         result.connect_failed = true;
         return result;
     }
@@ -195,14 +225,21 @@ async fn session(
     let (out_tx, writer) = super::spawn_writer(sink);
     let sent_at: Arc<Mutex<BTreeMap<u64, f64>>> = Arc::new(Mutex::new(BTreeMap::new()));
     let reader = {
-        let (sent_at, acks, hists, timeline) = (sent_at.clone(), out_tx.clone(), hists.clone(), timeline.clone());
+        let (sent_at, acks, hists, timeline) = (
+            sent_at.clone(),
+            out_tx.clone(),
+            hists.clone(),
+            timeline.clone(),
+        );
         tokio::spawn(async move {
             let (mut frames, mut errors, mut answered) = (0u64, 0u64, 0u64);
             while let Some(Ok(msg)) = stream.next().await {
                 match msg {
                     Message::Binary(bytes) => {
                         let now = session_start.elapsed().as_secs_f64() * 1e3;
-                        let Ok((h, _)) = decode_frame(&bytes) else { continue };
+                        let Ok((h, _)) = decode_frame(&bytes) else {
+                            continue;
+                        };
                         let _ = acks.send(Some(format!(r#"{{"type":"ack","frame":{}}}"#, h.frame)));
                         frames += 1;
                         answered += u64::from(h.seq.is_some());
@@ -212,7 +249,10 @@ async fn session(
                                 *slot += 1;
                             }
                         }
-                        let latency = h.seq.and_then(|s| sent_at.lock().ok().and_then(|m| m.get(&s).copied())).map(|t| now - t);
+                        let latency = h
+                            .seq
+                            .and_then(|s| sent_at.lock().ok().and_then(|m| m.get(&s).copied()))
+                            .map(|t| now - t);
                         if let Ok(mut hs) = hists.lock() {
                             let mut rec = |k: &str, ms: f64| {
                                 if let Some(hh) = hs.get_mut(k) {
@@ -236,14 +276,21 @@ async fn session(
             (frames, errors, answered)
         })
     };
-    let viewing = Viewing { width: opts.hello.width, height: opts.hello.height, width_cm: opts.hello.display.width_cm, distance_cm: opts.hello.display.distance_cm };
+    let viewing = Viewing {
+        width: opts.hello.width,
+        height: opts.hello.height,
+        width_cm: opts.hello.display.width_cm,
+        distance_cm: opts.hello.display.distance_cm,
+    };
     let mut eye = SyntheticEye::new(opts.seed.wrapping_add(index as u32), &viewing);
     let period = Duration::from_secs_f64(1.0 / opts.rate_hz.clamp(1.0, 10_000.0));
     let mut tick = tokio::time::interval(period);
     let mut seq = 0u64;
     // With a recording: loop it, each session starting a different share of the way in.
     let recording = opts.recording.as_ref().filter(|r| r.len() > 1);
-    let span = recording.and_then(|r| r.last().map(|l| l.t_ms + 1.0)).unwrap_or(1.0);
+    let span = recording
+        .and_then(|r| r.last().map(|l| l.t_ms + 1.0))
+        .unwrap_or(1.0);
     let offset = span * index as f64 / opts.sessions.max(1) as f64;
     let mut cursor = 0usize;
     while Instant::now() < deadline {
@@ -267,7 +314,10 @@ async fn session(
             None => {
                 tick.tick().await;
                 let (deg, pupil) = eye.step(t);
-                (deg.map(|d| degrees_to_frame(&viewing, d).map(|v| v.clamp(0.0, 1.0))), pupil)
+                (
+                    deg.map(|d| degrees_to_frame(&viewing, d).map(|v| v.clamp(0.0, 1.0))),
+                    pupil,
+                )
             }
         };
         let Some([x, y]) = xy else { continue };
@@ -276,8 +326,15 @@ async fn session(
         if let Ok(mut m) = sent_at.lock() {
             m.insert(seq, t);
         }
-        let pupil = pupil.map(|p| format!(r#","pupil_mm":{p}"#)).unwrap_or_default();
-        if out_tx.send(Some(format!(r#"{{"type":"gaze","seq":{seq},"t_ms":{t},"x":{x},"y":{y}{pupil}}}"#))).is_err() {
+        let pupil = pupil
+            .map(|p| format!(r#","pupil_mm":{p}"#))
+            .unwrap_or_default();
+        if out_tx
+            .send(Some(format!(
+                r#"{{"type":"gaze","seq":{seq},"t_ms":{t},"x":{x},"y":{y}{pupil}}}"#
+            )))
+            .is_err()
+        {
             break;
         }
         result.gaze_sent += 1;
@@ -287,12 +344,19 @@ async fn session(
     }
     let _ = out_tx.send(None);
     let _ = writer.await;
-    if let Ok(Ok((frames, errors, answered))) = tokio::time::timeout(Duration::from_secs(10), reader).await {
+    if let Ok(Ok((frames, errors, answered))) =
+        tokio::time::timeout(Duration::from_secs(10), reader).await
+    {
         result.frames = frames;
         result.errors += errors;
         result.answered = answered;
     }
-    result.active_s = session_start.elapsed().as_secs_f64().min(deadline.saturating_duration_since(session_start).as_secs_f64().max(1e-3));
+    result.active_s = session_start.elapsed().as_secs_f64().min(
+        deadline
+            .saturating_duration_since(session_start)
+            .as_secs_f64()
+            .max(1e-3),
+    );
     result
 }
 
@@ -300,11 +364,28 @@ async fn session(
 pub fn svg(report: &LoadReport) -> String {
     use std::fmt::Write;
     let (w, h, pad) = (900.0, 380.0, 50.0);
-    let mut s = format!(r#"<svg xmlns="http://www.w3.org/2000/svg" width="{w}" height="{h}" font-family="sans-serif" font-size="11"><rect width="100%" height="100%" fill="white"/>"#);
-    let _ = write!(s, r#"<text x="{pad}" y="20" font-size="14" font-weight="bold">fovea load: {} sessions, {:.0} s, {:.1} fps total, p95 gaze→frame {:.1} ms</text>"#, report.sessions, report.seconds, report.fps_total, report.latency_ms.p95);
-    let max_ms = report.histograms.values().map(|h| h.value_at_quantile(0.99) as f64 / 1000.0).fold(1.0, f64::max) * 1.1;
+    let mut s = format!(
+        r#"<svg xmlns="http://www.w3.org/2000/svg" width="{w}" height="{h}" font-family="sans-serif" font-size="11"><rect width="100%" height="100%" fill="white"/>"#
+    );
+    let _ = write!(
+        s,
+        r#"<text x="{pad}" y="20" font-size="14" font-weight="bold">fovea load: {} sessions, {:.0} s, {:.1} fps total, p95 gaze→frame {:.1} ms</text>"#,
+        report.sessions, report.seconds, report.fps_total, report.latency_ms.p95
+    );
+    let max_ms = report
+        .histograms
+        .values()
+        .map(|h| h.value_at_quantile(0.99) as f64 / 1000.0)
+        .fold(1.0, f64::max)
+        * 1.1;
     let (pw, ph, top) = (380.0, 280.0, 50.0);
-    let _ = write!(s, r##"<rect x="{pad}" y="{top}" width="{pw}" height="{ph}" fill="none" stroke="#444"/><text x="{}" y="{}" text-anchor="middle">ms (to p99)</text><text x="{pad}" y="{}">CDF per stage</text>"##, pad + pw / 2.0, top + ph + 28.0, top - 6.0);
+    let _ = write!(
+        s,
+        r##"<rect x="{pad}" y="{top}" width="{pw}" height="{ph}" fill="none" stroke="#444"/><text x="{}" y="{}" text-anchor="middle">ms (to p99)</text><text x="{pad}" y="{}">CDF per stage</text>"##,
+        pad + pw / 2.0,
+        top + ph + 28.0,
+        top - 6.0
+    );
     let colours = ["#d62728", "#1f77b4", "#2ca02c", "#9467bd", "#ff7f0e"];
     for (i, (name, hist)) in report.histograms.iter().enumerate() {
         if hist.is_empty() {
@@ -314,18 +395,53 @@ pub fn svg(report: &LoadReport) -> String {
             .map(|k| {
                 let q = f64::from(k) / 50.0;
                 let v = hist.value_at_quantile(q) as f64 / 1000.0;
-                format!("{:.1},{:.1}", pad + (v / max_ms).min(1.0) * pw, top + ph - q * ph)
+                format!(
+                    "{:.1},{:.1}",
+                    pad + (v / max_ms).min(1.0) * pw,
+                    top + ph - q * ph
+                )
             })
             .collect();
         let c = colours[i % colours.len()];
-        let _ = write!(s, r#"<polyline points="{}" fill="none" stroke="{c}" stroke-width="2"/><text x="{}" y="{}" fill="{c}">{name}</text>"#, pts.join(" "), pad + pw + 8.0, top + 14.0 * (i as f64 + 1.0));
+        let _ = write!(
+            s,
+            r#"<polyline points="{}" fill="none" stroke="{c}" stroke-width="2"/><text x="{}" y="{}" fill="{c}">{name}</text>"#,
+            pts.join(" "),
+            pad + pw + 8.0,
+            top + 14.0 * (i as f64 + 1.0)
+        );
     }
     let x0 = pad + pw + 90.0;
     let pw2 = w - x0 - 20.0;
-    let peak = report.fps_timeline.iter().copied().max().unwrap_or(1).max(1) as f64;
+    let peak = report
+        .fps_timeline
+        .iter()
+        .copied()
+        .max()
+        .unwrap_or(1)
+        .max(1) as f64;
     let n = report.fps_timeline.len().max(1) as f64;
-    let _ = write!(s, r##"<rect x="{x0}" y="{top}" width="{pw2}" height="{ph}" fill="none" stroke="#444"/><text x="{x0}" y="{}">frames per second (all sessions), peak {peak}</text>"##, top - 6.0);
-    let pts: Vec<String> = report.fps_timeline.iter().enumerate().map(|(i, v)| format!("{:.1},{:.1}", x0 + (i as f64 + 0.5) / n * pw2, top + ph - *v as f64 / peak * ph)).collect();
-    let _ = write!(s, r##"<polyline points="{}" fill="none" stroke="#1f77b4" stroke-width="2"/></svg>"##, pts.join(" "));
+    let _ = write!(
+        s,
+        r##"<rect x="{x0}" y="{top}" width="{pw2}" height="{ph}" fill="none" stroke="#444"/><text x="{x0}" y="{}">frames per second (all sessions), peak {peak}</text>"##,
+        top - 6.0
+    );
+    let pts: Vec<String> = report
+        .fps_timeline
+        .iter()
+        .enumerate()
+        .map(|(i, v)| {
+            format!(
+                "{:.1},{:.1}",
+                x0 + (i as f64 + 0.5) / n * pw2,
+                top + ph - *v as f64 / peak * ph
+            )
+        })
+        .collect();
+    let _ = write!(
+        s,
+        r##"<polyline points="{}" fill="none" stroke="#1f77b4" stroke-width="2"/></svg>"##,
+        pts.join(" ")
+    );
     s
 }

@@ -17,7 +17,12 @@ type Sink = SplitSink<WebSocketStream<MaybeTlsStream<TcpStream>>, Message>;
 
 /// Every outgoing message of a split socket goes through one writer task; `None` closes the
 /// socket (readers hold senders for their acks, so the channel itself may never close first).
-pub(crate) fn spawn_writer(mut sink: Sink) -> (tokio::sync::mpsc::UnboundedSender<Option<String>>, tokio::task::JoinHandle<()>) {
+pub(crate) fn spawn_writer(
+    mut sink: Sink,
+) -> (
+    tokio::sync::mpsc::UnboundedSender<Option<String>>,
+    tokio::task::JoinHandle<()>,
+) {
     let (tx, mut rx) = tokio::sync::mpsc::unbounded_channel::<Option<String>>();
     let task = tokio::spawn(async move {
         while let Some(Some(text)) = rx.recv().await {

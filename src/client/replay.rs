@@ -79,18 +79,39 @@ pub struct ReplaySummary {
 
 /// When each sample is sent (ms after the replay starts) and its index: recording time from
 /// `start_ms`, divided by `speed`, the selection repeated `loops` times back to back.
-pub fn schedule(samples: &[Sample], speed: f64, start_ms: f64, duration_ms: Option<f64>, loops: u32) -> Vec<(f64, usize)> {
-    let speed = if speed.is_finite() && speed > 0.0 { speed } else { 1.0 };
+pub fn schedule(
+    samples: &[Sample],
+    speed: f64,
+    start_ms: f64,
+    duration_ms: Option<f64>,
+    loops: u32,
+) -> Vec<(f64, usize)> {
+    let speed = if speed.is_finite() && speed > 0.0 {
+        speed
+    } else {
+        1.0
+    };
     let end = duration_ms.map(|d| start_ms + d).unwrap_or(f64::INFINITY);
-    let selected: Vec<usize> = (0..samples.len()).filter(|&i| samples[i].t_ms >= start_ms && samples[i].t_ms < end).collect();
-    let Some((&first, &last)) = selected.first().zip(selected.last()) else { return Vec::new() };
+    let selected: Vec<usize> = (0..samples.len())
+        .filter(|&i| samples[i].t_ms >= start_ms && samples[i].t_ms < end)
+        .collect();
+    let Some((&first, &last)) = selected.first().zip(selected.last()) else {
+        return Vec::new();
+    };
     // One loop lasts from the first selected sample to one sample period past the last.
-    let period = if selected.len() > 1 { (samples[last].t_ms - samples[first].t_ms) / (selected.len() - 1) as f64 } else { 0.0 };
+    let period = if selected.len() > 1 {
+        (samples[last].t_ms - samples[first].t_ms) / (selected.len() - 1) as f64
+    } else {
+        0.0
+    };
     let span = samples[last].t_ms - samples[first].t_ms + period;
     let mut out = Vec::with_capacity(selected.len() * loops as usize);
     for l in 0..loops.max(1) {
         for &i in &selected {
-            out.push(((samples[i].t_ms - samples[first].t_ms + f64::from(l) * span) / speed, i));
+            out.push((
+                (samples[i].t_ms - samples[first].t_ms + f64::from(l) * span) / speed,
+                i,
+            ));
         }
     }
     out
@@ -98,7 +119,11 @@ pub fn schedule(samples: &[Sample], speed: f64, start_ms: f64, duration_ms: Opti
 
 /// Calls `send` for every scheduled sample at its time after `start`, on tokio's clock.
 /// Absolute deadlines: a late send does not delay the ones after it.
-pub async fn pace(start: tokio::time::Instant, plan: &[(f64, usize)], mut send: impl FnMut(usize, f64) -> bool) {
+pub async fn pace(
+    start: tokio::time::Instant,
+    plan: &[(f64, usize)],
+    mut send: impl FnMut(usize, f64) -> bool,
+) {
     for &(at_ms, index) in plan {
         tokio::time::sleep_until(start + Duration::from_secs_f64(at_ms / 1000.0)).await;
         if !send(index, at_ms) {
@@ -116,15 +141,31 @@ fn percentile(v: &mut [f64], q: f64) -> f64 {
 }
 
 /// Streams the samples and collects the frames. `progress(sent, total)` is called as it goes.
-pub async fn replay(samples: &[Sample], opts: &ReplayOptions, mut progress: impl FnMut(usize, usize)) -> Result<(Vec<FrameRecord>, ReplaySummary), ClientError> {
-    let plan = schedule(samples, opts.speed, opts.start_ms, opts.duration_ms, opts.loops);
+pub async fn replay(
+    samples: &[Sample],
+    opts: &ReplayOptions,
+    mut progress: impl FnMut(usize, usize),
+) -> Result<(Vec<FrameRecord>, ReplaySummary), ClientError> {
+    let plan = schedule(
+        samples,
+        opts.speed,
+        opts.start_ms,
+        opts.duration_ms,
+        opts.loops,
+    );
     let (ws, _) = tokio_tungstenite::connect_async_with_config(&opts.url, None, true)
         .await
-        .map_err(|e| ClientError::Connect { url: opts.url.clone(), source: Box::new(e) })?;
+        .map_err(|e| ClientError::Connect {
+            url: opts.url.clone(),
+            source: Box::new(e),
+        })?;
     let (mut sink, mut stream) = ws.split();
-    let mut hello = serde_json::to_value(&opts.hello).map_err(|e| ClientError::BadMessage(e.to_string()))?;
+    let mut hello =
+        serde_json::to_value(&opts.hello).map_err(|e| ClientError::BadMessage(e.to_string()))?;
     hello["type"] = "hello".into();
-    sink.send(Message::Text(hello.to_string().into())).await.map_err(Box::new)?;
+    sink.send(Message::Text(hello.to_string().into()))
+        .await
+        .map_err(Box::new)?;
     // Wait for welcome before streaming.
     loop {
         match stream.next().await {
@@ -151,15 +192,27 @@ pub async fn replay(samples: &[Sample], opts: &ReplayOptions, mut progress: impl
         tokio::spawn(async move {
             let mut frames = Vec::new();
             while let Some(Ok(msg)) = stream.next().await {
-                let Message::Binary(bytes) = msg else { continue };
+                let Message::Binary(bytes) = msg else {
+                    continue;
+                };
                 let received_ms = clock.elapsed().as_secs_f64() * 1e3;
-                let Ok((h, image)) = decode_frame(&bytes) else { continue };
+                let Ok((h, image)) = decode_frame(&bytes) else {
+                    continue;
+                };
                 let _ = acks.send(Some(format!(r#"{{"type":"ack","frame":{}}}"#, h.frame)));
-                let sent = h.seq.and_then(|s| sent_at.lock().ok().and_then(|v| v.get(s as usize).copied().flatten()));
+                let sent = h.seq.and_then(|s| {
+                    sent_at
+                        .lock()
+                        .ok()
+                        .and_then(|v| v.get(s as usize).copied().flatten())
+                });
                 frames.push(FrameRecord {
                     frame: h.frame,
                     seq: h.seq,
-                    sample_t_ms: h.seq.and_then(|s| plan.get((s as usize).wrapping_sub(1))).map(|(_, i)| recorded[*i]),
+                    sample_t_ms: h
+                        .seq
+                        .and_then(|s| plan.get((s as usize).wrapping_sub(1)))
+                        .map(|(_, i)| recorded[*i]),
                     sent_ms: sent,
                     received_ms,
                     latency_ms: sent.map(|s| received_ms - s),
@@ -194,8 +247,15 @@ pub async fn replay(samples: &[Sample], opts: &ReplayOptions, mut progress: impl
         if let Ok(mut v) = sent_at.lock() {
             v[seq as usize] = Some(t_ms);
         }
-        let pupil = s.pupil_mm.map(|p| format!(r#","pupil_mm":{p}"#)).unwrap_or_default();
-        let ok = out_tx.send(Some(format!(r#"{{"type":"gaze","seq":{seq},"t_ms":{t_ms},"x":{x},"y":{y}{pupil}}}"#))).is_ok();
+        let pupil = s
+            .pupil_mm
+            .map(|p| format!(r#","pupil_mm":{p}"#))
+            .unwrap_or_default();
+        let ok = out_tx
+            .send(Some(format!(
+                r#"{{"type":"gaze","seq":{seq},"t_ms":{t_ms},"x":{x},"y":{y}{pupil}}}"#
+            )))
+            .is_ok();
         sent_count += 1;
         if sent_count % 200 == 0 {
             progress(sent_count + unsendable, total);
@@ -268,18 +328,41 @@ mod tests {
     use super::*;
 
     fn samples(n: usize, step: f64) -> Vec<Sample> {
-        (0..n).map(|i| Sample { t_ms: i as f64 * step, xy: Some([0.5, 0.5]), pupil_mm: None }).collect()
+        (0..n)
+            .map(|i| Sample {
+                t_ms: i as f64 * step,
+                xy: Some([0.5, 0.5]),
+                pupil_mm: None,
+            })
+            .collect()
     }
 
     #[test]
     fn schedule_scales_offsets_and_loops() {
         let s = samples(5, 2.0); // 0, 2, 4, 6, 8 ms
-        assert_eq!(schedule(&s, 1.0, 0.0, None, 1).iter().map(|p| p.0).collect::<Vec<_>>(), vec![0.0, 2.0, 4.0, 6.0, 8.0]);
-        assert_eq!(schedule(&s, 2.0, 4.0, None, 1), vec![(0.0, 2), (1.0, 3), (2.0, 4)]);
+        assert_eq!(
+            schedule(&s, 1.0, 0.0, None, 1)
+                .iter()
+                .map(|p| p.0)
+                .collect::<Vec<_>>(),
+            vec![0.0, 2.0, 4.0, 6.0, 8.0]
+        );
+        assert_eq!(
+            schedule(&s, 2.0, 4.0, None, 1),
+            vec![(0.0, 2), (1.0, 3), (2.0, 4)]
+        );
         let looped = schedule(&s, 1.0, 2.0, Some(4.0), 2);
-        assert_eq!(looped, vec![(0.0, 1), (2.0, 2), (4.0, 1), (6.0, 2)], "a loop spans its samples plus one period");
+        assert_eq!(
+            looped,
+            vec![(0.0, 1), (2.0, 2), (4.0, 1), (6.0, 2)],
+            "a loop spans its samples plus one period"
+        );
         assert!(schedule(&s, 1.0, 100.0, None, 1).is_empty());
-        assert_eq!(schedule(&s, 0.0, 0.0, None, 1).len(), 5, "a zero speed falls back to real time");
+        assert_eq!(
+            schedule(&s, 0.0, 0.0, None, 1).len(),
+            5,
+            "a zero speed falls back to real time"
+        );
     }
 
     #[tokio::test(start_paused = true)]
@@ -297,7 +380,10 @@ mod tests {
         for (i, at) in sent {
             // tokio's timer has millisecond granularity; the paused clock lands on the deadline.
             let expected = Duration::from_millis(i as u64);
-            assert!(at >= expected && at - expected < Duration::from_millis(1), "sample {i} at {at:?}");
+            assert!(
+                at >= expected && at - expected < Duration::from_millis(1),
+                "sample {i} at {at:?}"
+            );
         }
     }
 }

@@ -5,7 +5,12 @@ use crate::protocol::Codec;
 #[derive(Debug, thiserror::Error)]
 pub enum EncodeError {
     #[error("{width}x{height} RGBA needs {expected} bytes, got {got}")]
-    Size { width: u32, height: u32, expected: usize, got: usize },
+    Size {
+        width: u32,
+        height: u32,
+        expected: usize,
+        got: usize,
+    },
     #[error("JPEG frames are at most 65535 pixels per side, got {0}x{1}")]
     JpegTooLarge(u32, u32),
     #[error("JPEG encoding failed: {0}")]
@@ -15,10 +20,21 @@ pub enum EncodeError {
 }
 
 /// Encodes tightly packed sRGB RGBA8 pixels. `quality` (1–100) applies to JPEG only.
-pub fn encode(rgba: &[u8], width: u32, height: u32, codec: Codec, quality: u8) -> Result<Vec<u8>, EncodeError> {
+pub fn encode(
+    rgba: &[u8],
+    width: u32,
+    height: u32,
+    codec: Codec,
+    quality: u8,
+) -> Result<Vec<u8>, EncodeError> {
     let expected = width as usize * height as usize * 4;
     if rgba.len() != expected {
-        return Err(EncodeError::Size { width, height, expected, got: rgba.len() });
+        return Err(EncodeError::Size {
+            width,
+            height,
+            expected,
+            got: rgba.len(),
+        });
     }
     match codec {
         Codec::Jpeg => encode_jpeg(rgba, width, height, quality),
@@ -58,7 +74,14 @@ mod tests {
     #[test]
     fn wrong_buffer_length_is_an_error() {
         let e = encode(&[0; 10], 2, 2, Codec::Png, 90).unwrap_err();
-        assert!(matches!(e, EncodeError::Size { expected: 16, got: 10, .. }));
+        assert!(matches!(
+            e,
+            EncodeError::Size {
+                expected: 16,
+                got: 10,
+                ..
+            }
+        ));
     }
 
     #[test]

@@ -47,7 +47,10 @@ pub fn build(side: u32, seed: u64) -> Vec<u32> {
     let pts: Vec<[f64; 2]> = (0..n)
         .map(|k| {
             let (x, y) = ((k as u32 % side) as f64, (k as u32 / side) as f64);
-            [x + 0.5 + 0.02 * (next(&mut rng) - 0.5), y + 0.5 + 0.02 * (next(&mut rng) - 0.5)]
+            [
+                x + 0.5 + 0.02 * (next(&mut rng) - 0.5),
+                y + 0.5 + 0.02 * (next(&mut rng) - 0.5),
+            ]
         })
         .collect();
     let size = f64::from(side);
@@ -85,22 +88,29 @@ pub fn build(side: u32, seed: u64) -> Vec<u32> {
                     .collect()
             })
             .collect();
-        let mut w: Vec<f64> = neighbours.iter().map(|nb| nb.iter().map(|(_, wij)| wij).sum()).collect();
+        let mut w: Vec<f64> = neighbours
+            .iter()
+            .map(|nb| nb.iter().map(|(_, wij)| wij).sum())
+            .collect();
         let mut removed = vec![false; from];
         for r in (to..from).rev() {
             // The sample most crowded by its neighbours goes first.
-            let (slot, _) = w
-                .iter()
-                .enumerate()
-                .filter(|(s, _)| !removed[*s])
-                .fold((usize::MAX, f64::NEG_INFINITY), |best, (s, &v)| if v > best.1 { (s, v) } else { best });
+            let (slot, _) = w.iter().enumerate().filter(|(s, _)| !removed[*s]).fold(
+                (usize::MAX, f64::NEG_INFINITY),
+                |best, (s, &v)| if v > best.1 { (s, v) } else { best },
+            );
             removed[slot] = true;
             rank[alive[slot]] = r as u32;
             for &(other, wij) in &neighbours[slot] {
                 w[other] -= wij;
             }
         }
-        alive = alive.iter().zip(&removed).filter(|(_, r)| !**r).map(|(&i, _)| i).collect();
+        alive = alive
+            .iter()
+            .zip(&removed)
+            .filter(|(_, r)| !**r)
+            .map(|(&i, _)| i)
+            .collect();
     }
     if let Some(&last) = alive.first() {
         rank[last] = 0;
@@ -153,7 +163,10 @@ mod tests {
             // between the closest two samples; white noise lets samples touch (distance 1)
             // down to 1/64 and reaches only 5.1 px at 1/256 where blue keeps 11.2.
             let spacing = 1.0 / density.sqrt();
-            assert!(b >= 0.65 * spacing, "density {density}: blue min distance {b}, spacing {spacing}");
+            assert!(
+                b >= 0.65 * spacing,
+                "density {density}: blue min distance {b}, spacing {spacing}"
+            );
             assert!(b >= 1.4 * w, "density {density}: blue {b} vs white {w}");
         }
     }
@@ -161,8 +174,16 @@ mod tests {
     #[test]
     fn thresholds_select_exactly_the_requested_share() {
         let t = thresholds();
-        assert_eq!(t.iter().filter(|&&v| v < 1.0).count(), t.len(), "p = 1 samples every pixel");
-        assert_eq!(t.iter().filter(|&&v| v < 0.0).count(), 0, "p = 0 samples none");
+        assert_eq!(
+            t.iter().filter(|&&v| v < 1.0).count(),
+            t.len(),
+            "p = 1 samples every pixel"
+        );
+        assert_eq!(
+            t.iter().filter(|&&v| v < 0.0).count(),
+            0,
+            "p = 0 samples none"
+        );
         assert_eq!(t.iter().filter(|&&v| v < 0.25).count(), t.len() / 4);
     }
 }

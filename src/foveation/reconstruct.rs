@@ -82,7 +82,9 @@ pub fn jfa(width: u32, height: u32, seeds: &[u32]) -> Vec<u32> {
 }
 
 pub fn jfa_with_steps(width: u32, height: u32, seeds: &[u32], steps: &[u32]) -> Vec<u32> {
-    steps.iter().fold(seeds.to_vec(), |s, &k| jfa_pass(width, height, k, &s))
+    steps
+        .iter()
+        .fold(seeds.to_vec(), |s, &k| jfa_pass(width, height, k, &s))
 }
 
 /// The largest distance to the nearest seed that sampling at minimum probability ξ leaves,
@@ -99,7 +101,11 @@ pub fn brute_force_nearest(width: u32, height: u32, seeds: &[u32]) -> Vec<u32> {
     (0..width * height)
         .map(|k| {
             let (x, y) = ((k % width) as i32, (k / width) as i32);
-            sites.iter().copied().min_by_key(|&s| dist2(s, x, y)).unwrap_or(NO_SEED)
+            sites
+                .iter()
+                .copied()
+                .min_by_key(|&s| dist2(s, x, y))
+                .unwrap_or(NO_SEED)
         })
         .collect()
 }
@@ -146,7 +152,9 @@ pub fn reconstruct(
                 return fallback[k];
             }
             let d2 = dist2(s, x, y);
-            let Some(max_window) = sibson_max_window else { return value_of(s) };
+            let Some(max_window) = sibson_max_window else {
+                return value_of(s);
+            };
             if d2 == 0 || !covered[k] {
                 return value_of(s);
             }
@@ -186,7 +194,9 @@ mod tests {
     fn random_seeds(w: u32, h: u32, density: f64, mut state: u64) -> Vec<u32> {
         (0..w * h)
             .map(|k| {
-                state = state.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+                state = state
+                    .wrapping_mul(6364136223846793005)
+                    .wrapping_add(1442695040888963407);
                 let r = (state >> 33) as f64 / (1u64 << 31) as f64;
                 if r < density {
                     pack(k % w, k / w)
@@ -199,21 +209,35 @@ mod tests {
 
     #[test]
     fn jfa_agrees_with_brute_force_on_random_seed_sets() {
-        for (w, h, density, seed) in [(96, 64, 0.01, 1), (61, 47, 0.05, 2), (128, 128, 0.002, 3), (40, 90, 0.3, 4)] {
+        for (w, h, density, seed) in [
+            (96, 64, 0.01, 1),
+            (61, 47, 0.05, 2),
+            (128, 128, 0.002, 3),
+            (40, 90, 0.3, 4),
+        ] {
             let seeds = random_seeds(w, h, density, seed);
             let fast = jfa(w, h, &seeds);
             let exact = brute_force_nearest(w, h, &seeds);
             let mut wrong = 0;
             for k in 0..seeds.len() {
-                let (df, de) = (seed_distance2(w, k, fast[k]), seed_distance2(w, k, exact[k]));
+                let (df, de) = (
+                    seed_distance2(w, k, fast[k]),
+                    seed_distance2(w, k, exact[k]),
+                );
                 if df != de {
                     wrong += 1;
                     // JFA+1's errors are near-ties: the seed found is at most a pixel farther.
                     let (df, de) = ((df as f64).sqrt(), (de as f64).sqrt());
-                    assert!(df - de <= 1.5, "{w}x{h}: pixel {k} got a seed {df:.2} away, nearest is {de:.2}");
+                    assert!(
+                        df - de <= 1.5,
+                        "{w}x{h}: pixel {k} got a seed {df:.2} away, nearest is {de:.2}"
+                    );
                 }
             }
-            assert!(wrong * 100 <= seeds.len(), "{w}x{h} density {density}: {wrong} wrong pixels");
+            assert!(
+                wrong * 100 <= seeds.len(),
+                "{w}x{h} density {density}: {wrong} wrong pixels"
+            );
         }
     }
 
@@ -242,7 +266,15 @@ mod tests {
         let f = |k: usize| 0.02 * (k as u32 % w) as f32 - 0.013 * (k as u32 / w) as f32 + 0.5;
         let values: Vec<[f32; 4]> = (0..seeds.len()).map(|k| [f(k); 4]).collect();
         let near = jfa(w, h, &seeds);
-        let out = reconstruct(w, h, &near, &vec![true; seeds.len()], &values, &values, sibson);
+        let out = reconstruct(
+            w,
+            h,
+            &near,
+            &vec![true; seeds.len()],
+            &values,
+            &values,
+            sibson,
+        );
         let mut err = 0.0;
         let mut n = 0;
         for k in 0..seeds.len() {
@@ -261,8 +293,14 @@ mod tests {
         let sibson = ramp_error(Some(16));
         // Natural-neighbour interpolation has linear precision; the discrete, windowed version
         // keeps most of it. Nearest-seed copies are off by about a cell radius times the slope.
-        assert!(sibson < 0.35 * nearest, "sibson {sibson:.4} vs nearest {nearest:.4}");
-        assert!(sibson < 0.01, "sibson mean error {sibson:.4} on a ramp of slope 0.02/px");
+        assert!(
+            sibson < 0.35 * nearest,
+            "sibson {sibson:.4} vs nearest {nearest:.4}"
+        );
+        assert!(
+            sibson < 0.01,
+            "sibson mean error {sibson:.4} on a ramp of slope 0.02/px"
+        );
     }
 
     #[test]
@@ -270,7 +308,15 @@ mod tests {
         let (w, h) = (20, 20);
         let seeds = random_seeds(w, h, 0.1, 5);
         let values: Vec<[f32; 4]> = (0..400).map(|k| [k as f32; 4]).collect();
-        let out = reconstruct(w, h, &jfa(w, h, &seeds), &[true; 400], &values, &values, Some(8));
+        let out = reconstruct(
+            w,
+            h,
+            &jfa(w, h, &seeds),
+            &[true; 400],
+            &values,
+            &values,
+            Some(8),
+        );
         for (k, s) in seeds.iter().enumerate() {
             if *s != NO_SEED {
                 assert_eq!(out[k], values[k]);

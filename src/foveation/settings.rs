@@ -77,7 +77,8 @@ impl Foveation {
     pub fn jfa_steps(&self, width: u32, height: u32, min_xi: f32) -> Vec<u32> {
         use super::reconstruct::{jfa_steps, jfa_steps_within, max_gap_for};
         let full = jfa_steps(width, height);
-        let mut steps = jfa_steps_within(width, height, max_gap_for(self.min_probability.max(min_xi)));
+        let mut steps =
+            jfa_steps_within(width, height, max_gap_for(self.min_probability.max(min_xi)));
         if steps.len() % 2 != full.len() % 2 {
             steps.push(1);
         }
@@ -111,7 +112,13 @@ pub enum Rung {
 }
 
 impl Rung {
-    pub const ALL: [Rung; 5] = [Rung::Opaque, Rung::NormalBlur, Rung::Screen, Rung::Hierarchical, Rung::BruteForce];
+    pub const ALL: [Rung; 5] = [
+        Rung::Opaque,
+        Rung::NormalBlur,
+        Rung::Screen,
+        Rung::Hierarchical,
+        Rung::BruteForce,
+    ];
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
@@ -125,7 +132,11 @@ pub struct Translucency {
 }
 
 impl Translucency {
-    pub const DEFAULT: Translucency = Translucency { rung: Rung::Hierarchical, cut_level: 0, cut_epsilon: 0.5 };
+    pub const DEFAULT: Translucency = Translucency {
+        rung: Rung::Hierarchical,
+        cut_level: 0,
+        cut_epsilon: 0.5,
+    };
 }
 
 /// Overlays drawn over the frame for people looking at how it was made.
@@ -162,7 +173,10 @@ pub const PRESETS: &[&str] = &["reference", "full", "quality", "balanced", "fast
 
 impl Settings {
     pub fn preset(name: &str) -> Option<Settings> {
-        let on = Foveation { enabled: true, ..Foveation::OFF };
+        let on = Foveation {
+            enabled: true,
+            ..Foveation::OFF
+        };
         let foveation = match name {
             "reference" | "full" => Foveation::OFF,
             "quality" => Foveation {
@@ -170,7 +184,10 @@ impl Settings {
                 min_probability: 0.1,
                 ..on
             },
-            "balanced" => Foveation { min_probability: 0.05, ..on },
+            "balanced" => Foveation {
+                min_probability: 0.05,
+                ..on
+            },
             "fast" => Foveation {
                 mar_slope: 0.034,
                 min_probability: 0.02,
@@ -180,8 +197,15 @@ impl Settings {
             _ => return None,
         };
         let translucency = match name {
-            "reference" => Translucency { rung: Rung::BruteForce, ..Translucency::DEFAULT },
-            "fast" => Translucency { cut_level: 1, cut_epsilon: 1.0, ..Translucency::DEFAULT },
+            "reference" => Translucency {
+                rung: Rung::BruteForce,
+                ..Translucency::DEFAULT
+            },
+            "fast" => Translucency {
+                cut_level: 1,
+                cut_epsilon: 1.0,
+                ..Translucency::DEFAULT
+            },
             _ => Translucency::DEFAULT,
         };
         Some(Settings {
@@ -300,7 +324,13 @@ mod tests {
 
     #[test]
     fn sibson_window_follows_xi_and_stays_bounded() {
-        let w = |xi: f32| Foveation { min_probability: xi, ..Foveation::OFF }.sibson_max_window();
+        let w = |xi: f32| {
+            Foveation {
+                min_probability: xi,
+                ..Foveation::OFF
+            }
+            .sibson_max_window()
+        };
         assert_eq!(w(1.0), 1);
         assert_eq!(w(0.25), 2);
         assert_eq!(w(0.05), 5);

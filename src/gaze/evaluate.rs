@@ -33,8 +33,14 @@ fn angle(v: &Viewing, a: [f64; 2], b: [f64; 2]) -> f64 {
 
 pub fn evaluate(samples: &[Sample], viewing: &Viewing, horizons: &[f64]) -> Vec<HorizonError> {
     let frame_deg = [
-        2.0 * (0.5 * viewing.width_cm / viewing.distance_cm).atan().to_degrees(),
-        2.0 * (0.5 * viewing.width_cm * f64::from(viewing.height) / f64::from(viewing.width.max(1)) / viewing.distance_cm).atan().to_degrees(),
+        2.0 * (0.5 * viewing.width_cm / viewing.distance_cm)
+            .atan()
+            .to_degrees(),
+        2.0 * (0.5 * viewing.width_cm * f64::from(viewing.height)
+            / f64::from(viewing.width.max(1))
+            / viewing.distance_cm)
+            .atan()
+            .to_degrees(),
     ];
     let mut out = Vec::new();
     for &h in horizons {
@@ -49,10 +55,22 @@ pub fn evaluate(samples: &[Sample], viewing: &Viewing, horizons: &[f64]) -> Vec<
             while j < samples.len() && samples[j].t_ms < s.t_ms + h - 1.0 {
                 j += 1;
             }
-            let Some(future) = samples.get(j).filter(|f| (f.t_ms - (s.t_ms + h)).abs() <= 1.0).and_then(|f| f.xy) else { continue };
-            let Some(predicted) = predictor.predict(h) else { continue };
+            let Some(future) = samples
+                .get(j)
+                .filter(|f| (f.t_ms - (s.t_ms + h)).abs() <= 1.0)
+                .and_then(|f| f.xy)
+            else {
+                continue;
+            };
+            let Some(predicted) = predictor.predict(h) else {
+                continue;
+            };
             let saccade = predictor.in_saccade();
-            errors.push((saccade, angle(viewing, xy, future), angle(viewing, predicted, future)));
+            errors.push((
+                saccade,
+                angle(viewing, xy, future),
+                angle(viewing, predicted, future),
+            ));
         }
         for (class, want) in [("fixation", false), ("saccade", true)] {
             let mut hold: Vec<f64> = errors.iter().filter(|e| e.0 == want).map(|e| e.1).collect();
@@ -76,7 +94,13 @@ pub fn markdown(rows: &[HorizonError]) -> String {
     for r in rows {
         s.push_str(&format!(
             "| {} ms | {} | {} | {:.3} | {:.3} | {:.3} | {:.3} |\n",
-            r.horizon_ms, r.samples, r.class, r.hold_median_deg, r.hold_p95_deg, r.predicted_median_deg, r.predicted_p95_deg
+            r.horizon_ms,
+            r.samples,
+            r.class,
+            r.hold_median_deg,
+            r.hold_p95_deg,
+            r.predicted_median_deg,
+            r.predicted_p95_deg
         ));
     }
     s
@@ -88,13 +112,24 @@ mod tests {
 
     #[test]
     fn prediction_beats_holding_during_smooth_motion_and_matches_it_at_rest() {
-        let v = Viewing { width: 1920, height: 1080, width_cm: 53.0, distance_cm: 60.0 };
+        let v = Viewing {
+            width: 1920,
+            height: 1080,
+            width_cm: 53.0,
+            distance_cm: 60.0,
+        };
         // Synthetic-eye saccades: prediction must beat holding during them.
         let samples = crate::gaze::synthetic::generate(9, &v, 1000.0, 30_000.0);
         let rows = evaluate(&samples, &v, &[20.0]);
         let moving = rows.iter().find(|r| r.class == "saccade").unwrap();
-        assert!(moving.samples > 200 && moving.predicted_median_deg < 0.5 * moving.hold_median_deg, "{moving:?}");
+        assert!(
+            moving.samples > 200 && moving.predicted_median_deg < 0.5 * moving.hold_median_deg,
+            "{moving:?}"
+        );
         let still = rows.iter().find(|r| r.class == "fixation").unwrap();
-        assert!(still.predicted_median_deg <= still.hold_median_deg + 1e-12, "{still:?}");
+        assert!(
+            still.predicted_median_deg <= still.hold_median_deg + 1e-12,
+            "{still:?}"
+        );
     }
 }

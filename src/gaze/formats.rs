@@ -38,7 +38,14 @@ pub struct Columns {
 
 impl Default for Columns {
     fn default() -> Self {
-        Columns { time: "t_ms".into(), x: "x".into(), y: "y".into(), pupil: Some("pupil_mm".into()), time_unit: "ms".into(), pixels: false }
+        Columns {
+            time: "t_ms".into(),
+            x: "x".into(),
+            y: "y".into(),
+            pupil: Some("pupil_mm".into()),
+            time_unit: "ms".into(),
+            pixels: false,
+        }
     }
 }
 
@@ -57,7 +64,13 @@ pub struct ParseOptions {
 
 impl Default for ParseOptions {
     fn default() -> Self {
-        ParseOptions { format: None, screen: None, columns: Columns::default(), pupil_median_mm: 4.0, min_confidence: 0.6 }
+        ParseOptions {
+            format: None,
+            screen: None,
+            columns: Columns::default(),
+            pupil_median_mm: 4.0,
+            min_confidence: 0.6,
+        }
     }
 }
 
@@ -68,9 +81,17 @@ pub enum FormatError {
     #[error("cannot tell the format from the header {header:?}; say --format (eyelink, pupil_core, pupil_neon, tobii, generic)")]
     Unknown { header: String },
     #[error("{format:?} needs column {column:?}, which the header {header:?} lacks")]
-    MissingColumn { format: Format, column: String, header: String },
+    MissingColumn {
+        format: Format,
+        column: String,
+        header: String,
+    },
     #[error("line {line}: {column} = {value:?} is not a number")]
-    NotNumeric { line: usize, column: String, value: String },
+    NotNumeric {
+        line: usize,
+        column: String,
+        value: String,
+    },
     #[error("line {line}: time {t} goes back from {previous} (samples must be in time order)")]
     Unsorted { line: usize, t: f64, previous: f64 },
     #[error("line {line}: time {t} repeats the previous sample's time")]
@@ -110,28 +131,67 @@ pub fn detect(header: &[&str]) -> Option<Format> {
 }
 
 pub fn parse(text: &str, opts: &ParseOptions) -> Result<Recording, FormatError> {
-    let mut lines = text.lines().enumerate().filter(|(_, l)| !l.trim().is_empty());
+    let mut lines = text
+        .lines()
+        .enumerate()
+        .filter(|(_, l)| !l.trim().is_empty());
     let (_, header_line) = lines.next().ok_or(FormatError::Empty)?;
-    let header: Vec<&str> = header_line.split(',').map(|h| h.trim().trim_matches('"')).collect();
+    let header: Vec<&str> = header_line
+        .split(',')
+        .map(|h| h.trim().trim_matches('"'))
+        .collect();
     let format = match opts.format {
         Some(f) => f,
-        None => detect(&header).ok_or_else(|| FormatError::Unknown { header: header_line.to_string() })?,
+        None => detect(&header).ok_or_else(|| FormatError::Unknown {
+            header: header_line.to_string(),
+        })?,
     };
     let index: HashMap<&str, usize> = header.iter().enumerate().map(|(i, h)| (*h, i)).collect();
     let col = |name: &str| {
-        index.get(name).copied().ok_or_else(|| FormatError::MissingColumn {
-            format,
-            column: name.to_string(),
-            header: header_line.to_string(),
-        })
+        index
+            .get(name)
+            .copied()
+            .ok_or_else(|| FormatError::MissingColumn {
+                format,
+                column: name.to_string(),
+                header: header_line.to_string(),
+            })
     };
     // (time column, scale to ms, x, y, pupil, x/y scale, flip y, confidence)
     let c = &opts.columns;
     let (t_col, t_scale, x_col, y_col, pupil_col, conf_col) = match format {
-        Format::Eyelink => (col("t_s")?, 1e3, col("xpos")?, col("ypos")?, index.get("ps").copied(), None),
-        Format::PupilCore => (col("gaze_timestamp")?, 1e3, col("norm_pos_x")?, col("norm_pos_y")?, None, index.get("confidence").copied()),
-        Format::PupilNeon => (col("timestamp [ns]")?, 1e-6, col("gaze x [px]")?, col("gaze y [px]")?, None, None),
-        Format::Tobii => (col("device_time_stamp")?, 1e-3, col("gaze_point_x")?, col("gaze_point_y")?, index.get("pupil_diameter").copied(), None),
+        Format::Eyelink => (
+            col("t_s")?,
+            1e3,
+            col("xpos")?,
+            col("ypos")?,
+            index.get("ps").copied(),
+            None,
+        ),
+        Format::PupilCore => (
+            col("gaze_timestamp")?,
+            1e3,
+            col("norm_pos_x")?,
+            col("norm_pos_y")?,
+            None,
+            index.get("confidence").copied(),
+        ),
+        Format::PupilNeon => (
+            col("timestamp [ns]")?,
+            1e-6,
+            col("gaze x [px]")?,
+            col("gaze y [px]")?,
+            None,
+            None,
+        ),
+        Format::Tobii => (
+            col("device_time_stamp")?,
+            1e-3,
+            col("gaze_point_x")?,
+            col("gaze_point_y")?,
+            index.get("pupil_diameter").copied(),
+            None,
+        ),
         Format::Generic => {
             let scale = match c.time_unit.as_str() {
                 "s" => 1e3,
@@ -166,24 +226,37 @@ pub fn parse(text: &str, opts: &ParseOptions) -> Result<Recording, FormatError> 
     let mut previous = f64::NEG_INFINITY;
     for (i, line) in lines {
         let line_no = i + 1;
-        let fields: Vec<&str> = line.split(',').map(|f| f.trim().trim_matches('"')).collect();
+        let fields: Vec<&str> = line
+            .split(',')
+            .map(|f| f.trim().trim_matches('"'))
+            .collect();
         let number = |k: usize| -> Result<Option<f64>, FormatError> {
             let v = fields.get(k).copied().unwrap_or("");
             if v.is_empty() || v.eq_ignore_ascii_case("nan") {
                 return Ok(None);
             }
-            v.parse::<f64>().map(Some).map_err(|_| FormatError::NotNumeric {
-                line: line_no,
-                column: names.get(k).copied().unwrap_or("?").to_string(),
-                value: v.to_string(),
-            })
+            v.parse::<f64>()
+                .map(Some)
+                .map_err(|_| FormatError::NotNumeric {
+                    line: line_no,
+                    column: names.get(k).copied().unwrap_or("?").to_string(),
+                    value: v.to_string(),
+                })
         };
         let Some(t_raw) = number(t_col)? else {
-            return Err(FormatError::NotNumeric { line: line_no, column: names[t_col].to_string(), value: String::new() });
+            return Err(FormatError::NotNumeric {
+                line: line_no,
+                column: names[t_col].to_string(),
+                value: String::new(),
+            });
         };
         let t = t_raw * t_scale;
         if t < previous {
-            return Err(FormatError::Unsorted { line: line_no, t, previous });
+            return Err(FormatError::Unsorted {
+                line: line_no,
+                t,
+                previous,
+            });
         }
         if t == previous {
             return Err(FormatError::Duplicate { line: line_no, t });
@@ -198,7 +271,11 @@ pub fn parse(text: &str, opts: &ParseOptions) -> Result<Recording, FormatError> 
         let xy = match (x, y, confident) {
             (Some(x), Some(y), true) => {
                 let (nx, ny) = (x / screen.0, y / screen.1);
-                Some(if format == Format::PupilCore { [nx, 1.0 - ny] } else { [nx, ny] })
+                Some(if format == Format::PupilCore {
+                    [nx, 1.0 - ny]
+                } else {
+                    [nx, ny]
+                })
             }
             _ => None,
         };
@@ -207,7 +284,11 @@ pub fn parse(text: &str, opts: &ParseOptions) -> Result<Recording, FormatError> 
             None => None,
         };
         raw_pupil.push(pupil);
-        samples.push(Sample { t_ms: t - start, xy, pupil_mm: None });
+        samples.push(Sample {
+            t_ms: t - start,
+            xy,
+            pupil_mm: None,
+        });
     }
     if samples.is_empty() {
         return Err(FormatError::NoSamples);
@@ -230,17 +311,26 @@ pub fn parse(text: &str, opts: &ParseOptions) -> Result<Recording, FormatError> 
             for (s, p) in samples.iter_mut().zip(&raw_pupil) {
                 s.pupil_mm = p.map(|d| d.clamp(1.0, 10.0));
             }
-            raw_pupil.iter().any(|p| p.is_some()).then(|| "pupil diameter in mm as recorded, clamped to 1–10 mm".to_string())
+            raw_pupil
+                .iter()
+                .any(|p| p.is_some())
+                .then(|| "pupil diameter in mm as recorded, clamped to 1–10 mm".to_string())
         }
     };
-    Ok(Recording { format, samples, pupil_rule })
+    Ok(Recording {
+        format,
+        samples,
+        pupil_rule,
+    })
 }
 
 /// Writes samples in the generic format (what session recording produces).
 pub fn write_generic(samples: &[Sample]) -> String {
     let mut out = String::from("t_ms,x,y,pupil_mm\n");
     for s in samples {
-        let (x, y) = s.xy.map(|[x, y]| (format!("{x}"), format!("{y}"))).unwrap_or_default();
+        let (x, y) =
+            s.xy.map(|[x, y]| (format!("{x}"), format!("{y}")))
+                .unwrap_or_default();
         let p = s.pupil_mm.map(|p| format!("{p}")).unwrap_or_default();
         out.push_str(&format!("{},{x},{y},{p}\n", s.t_ms));
     }
@@ -252,7 +342,10 @@ mod tests {
     use super::*;
 
     fn eyelink() -> ParseOptions {
-        ParseOptions { screen: Some((1920, 1200)), ..Default::default() }
+        ParseOptions {
+            screen: Some((1920, 1200)),
+            ..Default::default()
+        }
     }
 
     /// The first 1.2 s of the real 500 Hz EyeLink recording cut around a blink (from 2.012 s).
@@ -269,7 +362,10 @@ mod tests {
         assert!((x - 952.8 / 1920.0).abs() < 1e-12 && (y - 593.5 / 1200.0).abs() < 1e-12);
         assert_eq!(r.samples[3].xy, None, "track loss");
         assert_eq!(r.samples[3].pupil_mm, None, "blink: pupil 0");
-        assert!(super::super::sendable(&r.samples[5]).is_none(), "far off screen: not sent");
+        assert!(
+            super::super::sendable(&r.samples[5]).is_none(),
+            "far off screen: not sent"
+        );
         // Median area 1068 maps to 4 mm.
         assert!((r.samples[0].pupil_mm.unwrap() - 4.0).abs() < 1e-9);
         assert!(r.pupil_rule.unwrap().contains("√area"));
@@ -277,11 +373,26 @@ mod tests {
 
     #[test]
     fn the_shipped_recordings_parse() {
-        for (file, w, h, n) in [
-            ("../../assets/gaze/eyelink_500hz_1920x1200.csv", 1920, 1200, 14_353),
-        ] {
-            let text = std::fs::read_to_string(std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("src/gaze").join(file)).unwrap();
-            let r = parse(&text, &ParseOptions { screen: Some((w, h)), ..Default::default() }).unwrap();
+        for (file, w, h, n) in [(
+            "../../assets/gaze/eyelink_500hz_1920x1200.csv",
+            1920,
+            1200,
+            14_353,
+        )] {
+            let text = std::fs::read_to_string(
+                std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+                    .join("src/gaze")
+                    .join(file),
+            )
+            .unwrap();
+            let r = parse(
+                &text,
+                &ParseOptions {
+                    screen: Some((w, h)),
+                    ..Default::default()
+                },
+            )
+            .unwrap();
             assert_eq!(r.samples.len(), n);
             let lost = r.samples.iter().filter(|s| s.xy.is_none()).count();
             assert!(lost > 0 && lost < n / 5, "track loss {lost}");
@@ -293,46 +404,106 @@ mod tests {
         let core = "gaze_timestamp,world_index,confidence,norm_pos_x,norm_pos_y\n100.0,0,0.9,0.25,0.75\n100.01,1,0.3,0.5,0.5\n";
         let r = parse(core, &ParseOptions::default()).unwrap();
         assert_eq!(r.format, Format::PupilCore);
-        assert_eq!(r.samples[0].xy, Some([0.25, 0.25]), "bottom-left origin flipped");
+        assert_eq!(
+            r.samples[0].xy,
+            Some([0.25, 0.25]),
+            "bottom-left origin flipped"
+        );
         assert_eq!(r.samples[1].xy, None, "low confidence is track loss");
         assert!((r.samples[1].t_ms - 10.0).abs() < 1e-6);
         let neon = "section id,recording id,timestamp [ns],gaze x [px],gaze y [px],worn\na,b,1000000000,800,600,1\na,b,1005000000,0,0,1\n";
         let r = parse(neon, &ParseOptions::default()).unwrap();
-        assert_eq!((r.format, r.samples[0].xy, r.samples[1].t_ms), (Format::PupilNeon, Some([0.5, 0.5]), 5.0));
+        assert_eq!(
+            (r.format, r.samples[0].xy, r.samples[1].t_ms),
+            (Format::PupilNeon, Some([0.5, 0.5]), 5.0)
+        );
         let tobii = "device_time_stamp,gaze_point_x,gaze_point_y,pupil_diameter\n1000,0.1,0.2,3.5\n9333,0.3,0.4,-1\n";
         let r = parse(tobii, &ParseOptions::default()).unwrap();
-        assert_eq!((r.format, r.samples[0].pupil_mm, r.samples[1].pupil_mm), (Format::Tobii, Some(3.5), None));
+        assert_eq!(
+            (r.format, r.samples[0].pupil_mm, r.samples[1].pupil_mm),
+            (Format::Tobii, Some(3.5), None)
+        );
         let generic = "time,gx,gy\n0,10,20\n1,30,40\n";
         let opts = ParseOptions {
             format: Some(Format::Generic),
             screen: Some((100, 100)),
-            columns: Columns { time: "time".into(), x: "gx".into(), y: "gy".into(), pupil: None, time_unit: "s".into(), pixels: true },
+            columns: Columns {
+                time: "time".into(),
+                x: "gx".into(),
+                y: "gy".into(),
+                pupil: None,
+                time_unit: "s".into(),
+                pixels: true,
+            },
             ..Default::default()
         };
         let r = parse(generic, &opts).unwrap();
-        assert_eq!((r.samples[1].t_ms, r.samples[1].xy), (1000.0, Some([0.3, 0.4])));
+        assert_eq!(
+            (r.samples[1].t_ms, r.samples[1].xy),
+            (1000.0, Some([0.3, 0.4]))
+        );
     }
 
     #[test]
     fn malformed_files_get_clear_errors() {
         assert_eq!(parse("", &eyelink()), Err(FormatError::Empty));
-        assert_eq!(parse("t_s,xpos,ypos,ps\n", &eyelink()), Err(FormatError::NoSamples));
-        assert!(matches!(parse("a,b\n1,2\n", &eyelink()), Err(FormatError::Unknown { .. })));
+        assert_eq!(
+            parse("t_s,xpos,ypos,ps\n", &eyelink()),
+            Err(FormatError::NoSamples)
+        );
+        assert!(matches!(
+            parse("a,b\n1,2\n", &eyelink()),
+            Err(FormatError::Unknown { .. })
+        ));
         let e = parse("t_s,xpos,ypos,ps\n0.0,abc,1,1\n", &eyelink()).unwrap_err();
-        assert_eq!(e, FormatError::NotNumeric { line: 2, column: "xpos".into(), value: "abc".into() });
-        assert!(matches!(parse("t_s,xpos,ypos,ps\n0.2,1,1,1\n0.1,1,1,1\n", &eyelink()), Err(FormatError::Unsorted { line: 3, .. })));
-        assert!(matches!(parse("t_s,xpos,ypos,ps\n0.2,1,1,1\n0.2,1,1,1\n", &eyelink()), Err(FormatError::Duplicate { line: 3, .. })));
-        assert_eq!(parse("t_s,xpos,ypos,ps\n0,1,1,1\n", &ParseOptions::default()), Err(FormatError::NeedsScreen(Format::Eyelink)));
-        let missing = ParseOptions { format: Some(Format::Tobii), ..Default::default() };
-        assert!(parse("device_time_stamp,x\n1,2\n", &missing).unwrap_err().to_string().contains("gaze_point_x"));
+        assert_eq!(
+            e,
+            FormatError::NotNumeric {
+                line: 2,
+                column: "xpos".into(),
+                value: "abc".into()
+            }
+        );
+        assert!(matches!(
+            parse("t_s,xpos,ypos,ps\n0.2,1,1,1\n0.1,1,1,1\n", &eyelink()),
+            Err(FormatError::Unsorted { line: 3, .. })
+        ));
+        assert!(matches!(
+            parse("t_s,xpos,ypos,ps\n0.2,1,1,1\n0.2,1,1,1\n", &eyelink()),
+            Err(FormatError::Duplicate { line: 3, .. })
+        ));
+        assert_eq!(
+            parse("t_s,xpos,ypos,ps\n0,1,1,1\n", &ParseOptions::default()),
+            Err(FormatError::NeedsScreen(Format::Eyelink))
+        );
+        let missing = ParseOptions {
+            format: Some(Format::Tobii),
+            ..Default::default()
+        };
+        assert!(parse("device_time_stamp,x\n1,2\n", &missing)
+            .unwrap_err()
+            .to_string()
+            .contains("gaze_point_x"));
     }
 
     #[test]
     fn generic_csv_round_trips() {
         let samples = vec![
-            Sample { t_ms: 0.0, xy: Some([0.25, 0.5]), pupil_mm: Some(3.5) },
-            Sample { t_ms: 2.5, xy: None, pupil_mm: None },
-            Sample { t_ms: 4.0, xy: Some([1.0, 0.0]), pupil_mm: None },
+            Sample {
+                t_ms: 0.0,
+                xy: Some([0.25, 0.5]),
+                pupil_mm: Some(3.5),
+            },
+            Sample {
+                t_ms: 2.5,
+                xy: None,
+                pupil_mm: None,
+            },
+            Sample {
+                t_ms: 4.0,
+                xy: Some([1.0, 0.0]),
+                pupil_mm: None,
+            },
         ];
         let back = parse(&write_generic(&samples), &ParseOptions::default()).unwrap();
         assert_eq!(back.samples, samples);

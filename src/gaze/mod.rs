@@ -44,10 +44,21 @@ mod tests {
 
     #[test]
     fn slightly_off_frame_samples_are_clamped_and_far_ones_dropped() {
-        let s = |x, y| Sample { t_ms: 0.0, xy: Some([x, y]), pupil_mm: None };
+        let s = |x, y| Sample {
+            t_ms: 0.0,
+            xy: Some([x, y]),
+            pupil_mm: None,
+        };
         assert_eq!(sendable(&s(1.05, -0.02)), Some([1.0, 0.0]));
         assert_eq!(sendable(&s(1.5, 0.5)), None);
         assert_eq!(sendable(&s(f64::NAN, 0.5)), None);
-        assert_eq!(sendable(&Sample { t_ms: 0.0, xy: None, pupil_mm: Some(4.0) }), None);
+        assert_eq!(
+            sendable(&Sample {
+                t_ms: 0.0,
+                xy: None,
+                pupil_mm: Some(4.0)
+            }),
+            None
+        );
     }
 }

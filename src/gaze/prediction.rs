@@ -47,7 +47,11 @@ fn min_jerk(t: f64) -> f64 {
 impl Predictor {
     /// `frame_deg`: the angle the frame subtends, horizontally and vertically.
     pub fn new(frame_deg: [f64; 2]) -> Predictor {
-        Predictor { deg_per_frame: frame_deg, history: VecDeque::new(), saccade: None }
+        Predictor {
+            deg_per_frame: frame_deg,
+            history: VecDeque::new(),
+            saccade: None,
+        }
     }
 
     /// Adds a valid sample (normalised position, client time in ms). Non-finite samples and
@@ -62,7 +66,12 @@ impl Predictor {
             None => None,
         };
         self.history.push_back((t_ms, xy));
-        while self.history.front().is_some_and(|(t, _)| t_ms - t > WINDOW_MS) && self.history.len() > 2 {
+        while self
+            .history
+            .front()
+            .is_some_and(|(t, _)| t_ms - t > WINDOW_MS)
+            && self.history.len() > 2
+        {
             self.history.pop_front();
         }
         let speed = self.speed_deg_s();
@@ -70,7 +79,11 @@ impl Predictor {
             (Some(s), _) if speed >= 0.5 * SACCADE_DEG_S => s.peak_deg_s = s.peak_deg_s.max(speed),
             (Some(_), _) => self.saccade = None,
             (None, Some((t, p))) if speed >= SACCADE_DEG_S => {
-                self.saccade = Some(Saccade { onset_ms: t, onset: p, peak_deg_s: speed });
+                self.saccade = Some(Saccade {
+                    onset_ms: t,
+                    onset: p,
+                    peak_deg_s: speed,
+                });
             }
             _ => {}
         }
@@ -86,7 +99,12 @@ impl Predictor {
         let mut v = [0.0; 2];
         for axis in 0..2 {
             let mean_p = self.history.iter().map(|(_, p)| p[axis]).sum::<f64>() / n as f64;
-            let (num, den) = self.history.iter().fold((0.0, 0.0), |(a, b), (t, p)| (a + (t - mean_t) * (p[axis] - mean_p), b + (t - mean_t).powi(2)));
+            let (num, den) = self.history.iter().fold((0.0, 0.0), |(a, b), (t, p)| {
+                (
+                    a + (t - mean_t) * (p[axis] - mean_p),
+                    b + (t - mean_t).powi(2),
+                )
+            });
             v[axis] = if den > 0.0 { num / den } else { 0.0 };
         }
         Some(v)
@@ -94,7 +112,9 @@ impl Predictor {
 
     /// Angular speed in degrees per second.
     pub fn speed_deg_s(&self) -> f64 {
-        self.velocity().map(|v| (v[0] * self.deg_per_frame[0]).hypot(v[1] * self.deg_per_frame[1]) * 1000.0).unwrap_or(0.0)
+        self.velocity()
+            .map(|v| (v[0] * self.deg_per_frame[0]).hypot(v[1] * self.deg_per_frame[1]) * 1000.0)
+            .unwrap_or(0.0)
     }
 
     /// Whether a saccade is in flight.
@@ -105,7 +125,11 @@ impl Predictor {
     /// The predicted gaze `horizon_ms` after the newest sample; None before any sample.
     pub fn predict(&self, horizon_ms: f64) -> Option<[f64; 2]> {
         let (t_last, last) = *self.history.back()?;
-        let h = if horizon_ms.is_finite() { horizon_ms.clamp(0.0, 500.0) } else { 0.0 };
+        let h = if horizon_ms.is_finite() {
+            horizon_ms.clamp(0.0, 500.0)
+        } else {
+            0.0
+        };
         let mut p = last;
         if let Some(s) = self.saccade {
             let to_deg = |v: [f64; 2]| [v[0] * self.deg_per_frame[0], v[1] * self.deg_per_frame[1]];
@@ -116,11 +140,20 @@ impl Predictor {
                 let amplitude = amplitude_from_peak_velocity(s.peak_deg_s).max(travelled);
                 let tau = (t_last + h - s.onset_ms) / saccade_duration_ms(amplitude);
                 let along = (amplitude * min_jerk(tau)).max(travelled);
-                p = [s.onset[0] + dir[0] * along / self.deg_per_frame[0], s.onset[1] + dir[1] * along / self.deg_per_frame[1]];
+                p = [
+                    s.onset[0] + dir[0] * along / self.deg_per_frame[0],
+                    s.onset[1] + dir[1] * along / self.deg_per_frame[1],
+                ];
             }
         }
         let m = OFF_FRAME_MARGIN;
-        let clamp = |v: f64| if v.is_finite() { v.clamp(-m, 1.0 + m) } else { 0.5 };
+        let clamp = |v: f64| {
+            if v.is_finite() {
+                v.clamp(-m, 1.0 + m)
+            } else {
+                0.5
+            }
+        };
         Some([clamp(p[0]), clamp(p[1])])
     }
 }
@@ -135,7 +168,11 @@ mod tests {
         for i in 0..10 {
             p.push(f64::from(i), [0.5 + 1e-5 * f64::from(i % 2), 0.5]);
         }
-        assert_eq!(p.predict(30.0), Some([0.5 + 1e-5, 0.5]), "fixation: hold the last sample");
+        assert_eq!(
+            p.predict(30.0),
+            Some([0.5 + 1e-5, 0.5]),
+            "fixation: hold the last sample"
+        );
         // A main-sequence 10° saccade from the synthetic eye's profile, sampled at 1 kHz: from
         // its peak on, the landing point is predicted within half a degree.
         let mut s = Predictor::new([47.7, 29.8]);
@@ -149,7 +186,11 @@ mod tests {
         }
         assert!(s.in_saccade());
         let [x, _] = s.predict(50.0).unwrap();
-        assert!((x - (0.3 + 10.0 / 47.7)).abs() * 47.7 < 0.5, "landing predicted at {:.2}°", (x - 0.3) * 47.7);
+        assert!(
+            (x - (0.3 + 10.0 / 47.7)).abs() * 47.7 < 0.5,
+            "landing predicted at {:.2}°",
+            (x - 0.3) * 47.7
+        );
     }
 
     #[test]
@@ -163,7 +204,10 @@ mod tests {
         for h in [0.0, 10.0, 50.0, 1e9, f64::NAN, f64::INFINITY, -5.0] {
             let [x, y] = p.predict(h).unwrap();
             assert!(x.is_finite() && y.is_finite());
-            assert!((-OFF_FRAME_MARGIN..=1.0 + OFF_FRAME_MARGIN).contains(&x), "h {h}: x {x}");
+            assert!(
+                (-OFF_FRAME_MARGIN..=1.0 + OFF_FRAME_MARGIN).contains(&x),
+                "h {h}: x {x}"
+            );
         }
     }
 }

@@ -54,10 +54,24 @@ impl Rng {
 
 #[derive(Debug, Clone, Copy, PartialEq)]
 enum Phase {
-    Fixation { until_ms: f64, next_micro_ms: f64 },
-    Saccade { from: [f64; 2], to: [f64; 2], start_ms: f64, duration_ms: f64 },
-    Pursuit { velocity: [f64; 2], until_ms: f64 },
-    Blink { until_ms: f64, resume: [f64; 2] },
+    Fixation {
+        until_ms: f64,
+        next_micro_ms: f64,
+    },
+    Saccade {
+        from: [f64; 2],
+        to: [f64; 2],
+        start_ms: f64,
+        duration_ms: f64,
+    },
+    Pursuit {
+        velocity: [f64; 2],
+        until_ms: f64,
+    },
+    Blink {
+        until_ms: f64,
+        resume: [f64; 2],
+    },
 }
 
 /// The eye's state; `sample_at` advances it.
@@ -75,16 +89,23 @@ pub struct SyntheticEye {
 
 impl SyntheticEye {
     pub fn new(seed: u32, viewing: &Viewing) -> SyntheticEye {
-        let half_w = (0.5 * viewing.width_cm / viewing.distance_cm).atan().to_degrees();
+        let half_w = (0.5 * viewing.width_cm / viewing.distance_cm)
+            .atan()
+            .to_degrees();
         let aspect = f64::from(viewing.height) / f64::from(viewing.width.max(1));
-        let half_h = (0.5 * viewing.width_cm * aspect / viewing.distance_cm).atan().to_degrees();
+        let half_h = (0.5 * viewing.width_cm * aspect / viewing.distance_cm)
+            .atan()
+            .to_degrees();
         let mut rng = Rng::new(seed);
         let next_blink_ms = rng.range(2000.0, 6000.0);
         SyntheticEye {
             rng,
             half_field: [half_w * 0.9, half_h * 0.9],
             pos: [0.0, 0.0],
-            phase: Phase::Fixation { until_ms: 300.0, next_micro_ms: 400.0 },
+            phase: Phase::Fixation {
+                until_ms: 300.0,
+                next_micro_ms: 400.0,
+            },
             pupil: 4.0,
             next_blink_ms,
             last_ms: 0.0,
@@ -107,28 +128,54 @@ impl SyntheticEye {
                     }
                     self.pos = resume;
                     self.next_blink_ms = t_ms + self.rng.range(2000.0, 6000.0);
-                    self.phase = Phase::Fixation { until_ms: t_ms + self.rng.range(150.0, 450.0), next_micro_ms: t_ms + 400.0 };
+                    self.phase = Phase::Fixation {
+                        until_ms: t_ms + self.rng.range(150.0, 450.0),
+                        next_micro_ms: t_ms + 400.0,
+                    };
                 }
-                Phase::Saccade { from, to, start_ms, duration_ms } => {
+                Phase::Saccade {
+                    from,
+                    to,
+                    start_ms,
+                    duration_ms,
+                } => {
                     let s = min_jerk((t_ms - start_ms) / duration_ms);
-                    self.pos = [from[0] + (to[0] - from[0]) * s, from[1] + (to[1] - from[1]) * s];
+                    self.pos = [
+                        from[0] + (to[0] - from[0]) * s,
+                        from[1] + (to[1] - from[1]) * s,
+                    ];
                     if t_ms >= start_ms + duration_ms {
                         self.pos = to;
-                        self.phase = Phase::Fixation { until_ms: t_ms + self.rng.range(150.0, 450.0), next_micro_ms: t_ms + self.rng.range(300.0, 900.0) };
+                        self.phase = Phase::Fixation {
+                            until_ms: t_ms + self.rng.range(150.0, 450.0),
+                            next_micro_ms: t_ms + self.rng.range(300.0, 900.0),
+                        };
                         continue;
                     }
                     return (Some(self.pos), Some(self.pupil));
                 }
                 Phase::Pursuit { velocity, until_ms } => {
-                    self.pos = self.clamp([self.pos[0] + velocity[0] * dt / 1000.0, self.pos[1] + velocity[1] * dt / 1000.0]);
+                    self.pos = self.clamp([
+                        self.pos[0] + velocity[0] * dt / 1000.0,
+                        self.pos[1] + velocity[1] * dt / 1000.0,
+                    ]);
                     if t_ms >= until_ms {
-                        self.phase = Phase::Fixation { until_ms: t_ms + self.rng.range(150.0, 450.0), next_micro_ms: t_ms + 400.0 };
+                        self.phase = Phase::Fixation {
+                            until_ms: t_ms + self.rng.range(150.0, 450.0),
+                            next_micro_ms: t_ms + 400.0,
+                        };
                     }
                     return (Some(self.pos), Some(self.pupil));
                 }
-                Phase::Fixation { until_ms, next_micro_ms } => {
+                Phase::Fixation {
+                    until_ms,
+                    next_micro_ms,
+                } => {
                     if t_ms >= self.next_blink_ms {
-                        self.phase = Phase::Blink { until_ms: t_ms + self.rng.range(100.0, 300.0), resume: self.pos };
+                        self.phase = Phase::Blink {
+                            until_ms: t_ms + self.rng.range(100.0, 300.0),
+                            resume: self.pos,
+                        };
                         continue;
                     }
                     if t_ms >= until_ms {
@@ -142,8 +189,14 @@ impl SyntheticEye {
                     if t_ms >= next_micro_ms {
                         let a = self.rng.range(0.1, 0.5);
                         let angle = self.rng.range(0.0, std::f64::consts::TAU);
-                        let to = self.clamp([self.pos[0] + a * angle.cos(), self.pos[1] + a * angle.sin()]);
-                        self.phase = Phase::Saccade { from: self.pos, to, start_ms: t_ms, duration_ms: saccade_duration_ms(a) };
+                        let to = self
+                            .clamp([self.pos[0] + a * angle.cos(), self.pos[1] + a * angle.sin()]);
+                        self.phase = Phase::Saccade {
+                            from: self.pos,
+                            to,
+                            start_ms: t_ms,
+                            duration_ms: saccade_duration_ms(a),
+                        };
                         continue;
                     }
                     return (Some(self.pos), Some(self.pupil));
@@ -153,18 +206,32 @@ impl SyntheticEye {
     }
 
     fn clamp(&self, p: [f64; 2]) -> [f64; 2] {
-        [p[0].clamp(-self.half_field[0], self.half_field[0]), p[1].clamp(-self.half_field[1], self.half_field[1])]
+        [
+            p[0].clamp(-self.half_field[0], self.half_field[0]),
+            p[1].clamp(-self.half_field[1], self.half_field[1]),
+        ]
     }
 
     fn start_next(&mut self, t_ms: f64) {
         if self.rng.next_f64() < 0.15 {
             let speed = self.rng.range(5.0, 20.0);
             let angle = self.rng.range(0.0, std::f64::consts::TAU);
-            self.phase = Phase::Pursuit { velocity: [speed * angle.cos(), speed * angle.sin()], until_ms: t_ms + self.rng.range(500.0, 1500.0) };
+            self.phase = Phase::Pursuit {
+                velocity: [speed * angle.cos(), speed * angle.sin()],
+                until_ms: t_ms + self.rng.range(500.0, 1500.0),
+            };
         } else {
-            let to = [self.rng.range(-1.0, 1.0) * self.half_field[0], self.rng.range(-1.0, 1.0) * self.half_field[1]];
+            let to = [
+                self.rng.range(-1.0, 1.0) * self.half_field[0],
+                self.rng.range(-1.0, 1.0) * self.half_field[1],
+            ];
             let amplitude = ((to[0] - self.pos[0]).powi(2) + (to[1] - self.pos[1]).powi(2)).sqrt();
-            self.phase = Phase::Saccade { from: self.pos, to, start_ms: t_ms, duration_ms: saccade_duration_ms(amplitude) };
+            self.phase = Phase::Saccade {
+                from: self.pos,
+                to,
+                start_ms: t_ms,
+                duration_ms: saccade_duration_ms(amplitude),
+            };
         }
     }
 }
@@ -187,7 +254,11 @@ pub fn generate(seed: u32, viewing: &Viewing, rate_hz: f64, duration_ms: f64) ->
         .map(|i| {
             let t = i as f64 * step;
             let (deg, pupil) = eye.step(t);
-            Sample { t_ms: t, xy: deg.map(|d| degrees_to_frame(viewing, d)), pupil_mm: pupil }
+            Sample {
+                t_ms: t,
+                xy: deg.map(|d| degrees_to_frame(viewing, d)),
+                pupil_mm: pupil,
+            }
         })
         .collect()
 }
@@ -197,13 +268,24 @@ mod tests {
     use super::*;
 
     fn view() -> Viewing {
-        Viewing { width: 1280, height: 720, width_cm: 53.0, distance_cm: 60.0 }
+        Viewing {
+            width: 1280,
+            height: 720,
+            width_cm: 53.0,
+            distance_cm: 60.0,
+        }
     }
 
     #[test]
     fn the_same_seed_gives_the_same_eye() {
-        assert_eq!(generate(7, &view(), 500.0, 3000.0), generate(7, &view(), 500.0, 3000.0));
-        assert_ne!(generate(7, &view(), 500.0, 3000.0), generate(8, &view(), 500.0, 3000.0));
+        assert_eq!(
+            generate(7, &view(), 500.0, 3000.0),
+            generate(7, &view(), 500.0, 3000.0)
+        );
+        assert_ne!(
+            generate(7, &view(), 500.0, 3000.0),
+            generate(8, &view(), 500.0, 3000.0)
+        );
     }
 
     #[test]
@@ -212,7 +294,12 @@ mod tests {
         let mut eye = SyntheticEye::new(3, &view());
         for a in [2.0, 5.0, 10.0, 20.0] {
             eye.pos = [0.0, 0.0];
-            eye.phase = Phase::Saccade { from: [0.0, 0.0], to: [a, 0.0], start_ms: 0.0, duration_ms: saccade_duration_ms(a) };
+            eye.phase = Phase::Saccade {
+                from: [0.0, 0.0],
+                to: [a, 0.0],
+                start_ms: 0.0,
+                duration_ms: saccade_duration_ms(a),
+            };
             eye.last_ms = 0.0;
             eye.next_blink_ms = 1e9;
             let mut prev = 0.0;
@@ -228,31 +315,51 @@ mod tests {
                 }
             }
             let expected = saccade_peak_velocity(a);
-            assert!((peak - expected).abs() < 0.03 * expected, "A = {a}°: peak {peak:.0}°/s, main sequence {expected:.0}°/s");
+            assert!(
+                (peak - expected).abs() < 0.03 * expected,
+                "A = {a}°: peak {peak:.0}°/s, main sequence {expected:.0}°/s"
+            );
         }
-        assert!(saccade_peak_velocity(10.0) > 1.8 * saccade_peak_velocity(2.0), "rises with amplitude");
-        assert!(saccade_peak_velocity(20.0) < 1.5 * saccade_peak_velocity(10.0), "and saturates");
+        assert!(
+            saccade_peak_velocity(10.0) > 1.8 * saccade_peak_velocity(2.0),
+            "rises with amplitude"
+        );
+        assert!(
+            saccade_peak_velocity(20.0) < 1.5 * saccade_peak_velocity(10.0),
+            "and saturates"
+        );
     }
 
     #[test]
     fn a_minute_of_eye_has_every_behaviour_and_stays_physiological() {
         let v = view();
         let samples = generate(11, &v, 250.0, 60_000.0);
-        let blinks = samples.windows(2).filter(|w| w[0].xy.is_some() && w[1].xy.is_none()).count();
+        let blinks = samples
+            .windows(2)
+            .filter(|w| w[0].xy.is_some() && w[1].xy.is_none())
+            .count();
         assert!((8..=30).contains(&blinks), "{blinks} blinks in a minute");
         for s in &samples {
             if let Some(p) = s.pupil_mm {
                 assert!((2.0..=8.0).contains(&p), "pupil {p}");
             }
             if let Some([x, y]) = s.xy {
-                assert!((0.0..=1.0).contains(&x) && (0.0..=1.0).contains(&y), "gaze ({x}, {y}) left the frame");
+                assert!(
+                    (0.0..=1.0).contains(&x) && (0.0..=1.0).contains(&y),
+                    "gaze ({x}, {y}) left the frame"
+                );
             }
         }
         // Saccades: some sample-to-sample jumps over 100°/s; fixations: most under 30°/s.
         let deg_per_frame = 2.0 * (0.5 * v.width_cm / v.distance_cm).atan().to_degrees();
         let speeds: Vec<f64> = samples
             .windows(2)
-            .filter_map(|w| Some(((w[1].xy?[0] - w[0].xy?[0]).hypot(w[1].xy?[1] - w[0].xy?[1])) * deg_per_frame / 0.004))
+            .filter_map(|w| {
+                Some(
+                    ((w[1].xy?[0] - w[0].xy?[0]).hypot(w[1].xy?[1] - w[0].xy?[1])) * deg_per_frame
+                        / 0.004,
+                )
+            })
             .collect();
         assert!(speeds.iter().filter(|s| **s > 100.0).count() > 50);
         assert!(speeds.iter().filter(|s| **s < 30.0).count() > speeds.len() * 3 / 4);
@@ -260,6 +367,9 @@ mod tests {
             .windows(2)
             .filter_map(|w| Some((w[1].pupil_mm? - w[0].pupil_mm?).abs()))
             .fold(0.0, f64::max);
-        assert!(max_step < 0.3, "the pupil changes smoothly: largest 4 ms step {max_step} mm");
+        assert!(
+            max_step < 0.3,
+            "the pupil changes smoothly: largest 4 ms step {max_step} mm"
+        );
     }
 }

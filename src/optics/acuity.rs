@@ -25,7 +25,11 @@ impl Viewing {
     /// where (0, 0) is the top-left corner of the frame.
     fn screen_point(&self, x: f64, y: f64) -> [f64; 3] {
         let s = self.cm_per_px();
-        [(x - 0.5 * f64::from(self.width)) * s, (y - 0.5 * f64::from(self.height)) * s, self.distance_cm]
+        [
+            (x - 0.5 * f64::from(self.width)) * s,
+            (y - 0.5 * f64::from(self.height)) * s,
+            self.distance_cm,
+        ]
     }
 
     /// Angle between the gaze and a pixel as seen from the eye, in degrees. Uses atan2 of the
@@ -33,7 +37,11 @@ impl Viewing {
     pub fn eccentricity_deg(&self, gaze_px: [f64; 2], px: [f64; 2]) -> f64 {
         let a = self.screen_point(gaze_px[0], gaze_px[1]);
         let b = self.screen_point(px[0], px[1]);
-        let cross = [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]];
+        let cross = [
+            a[1] * b[2] - a[2] * b[1],
+            a[2] * b[0] - a[0] * b[2],
+            a[0] * b[1] - a[1] * b[0],
+        ];
         let cross_len = (cross[0] * cross[0] + cross[1] * cross[1] + cross[2] * cross[2]).sqrt();
         let dot = a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
         cross_len.atan2(dot).to_degrees()
@@ -124,7 +132,12 @@ mod tests {
     use super::*;
 
     fn view() -> Viewing {
-        Viewing { width: 640, height: 480, width_cm: 53.0, distance_cm: 60.0 }
+        Viewing {
+            width: 640,
+            height: 480,
+            width_cm: 53.0,
+            distance_cm: 60.0,
+        }
     }
 
     #[test]
@@ -150,18 +163,36 @@ mod tests {
     #[test]
     fn probability_forms_hit_their_ends_and_stay_in_range() {
         for form in [ProbabilityForm::Linear, ProbabilityForm::Density] {
-            assert_eq!(acuity_probability(form, 0.05, 0.08, 0.9), 1.0, "{form:?}: finer than a pixel");
+            assert_eq!(
+                acuity_probability(form, 0.05, 0.08, 0.9),
+                1.0,
+                "{form:?}: finer than a pixel"
+            );
             assert_eq!(acuity_probability(form, 0.08, 0.08, 0.9), 1.0);
             for w in [0.0, 1e-9, 0.1, 0.5, 0.9, 5.0, f64::INFINITY, f64::NAN] {
                 let p = acuity_probability(form, w, 0.08, 0.9);
                 assert!((0.0..=1.0).contains(&p), "{form:?} w={w}: {p}");
             }
         }
-        assert_eq!(acuity_probability(ProbabilityForm::Linear, 0.9, 0.08, 0.9), 0.0);
-        assert_eq!(acuity_probability(ProbabilityForm::Linear, 0.5, 0.08, 0.08), 1.0, "w_far = w_min");
-        assert_eq!(acuity_probability(ProbabilityForm::Linear, 0.5, 0.08, 0.0), 1.0, "w_far → 0");
+        assert_eq!(
+            acuity_probability(ProbabilityForm::Linear, 0.9, 0.08, 0.9),
+            0.0
+        );
+        assert_eq!(
+            acuity_probability(ProbabilityForm::Linear, 0.5, 0.08, 0.08),
+            1.0,
+            "w_far = w_min"
+        );
+        assert_eq!(
+            acuity_probability(ProbabilityForm::Linear, 0.5, 0.08, 0.0),
+            1.0,
+            "w_far → 0"
+        );
         let d = acuity_probability(ProbabilityForm::Density, 0.16, 0.08, 0.9);
-        assert!((d - 0.25).abs() < 1e-12, "twice the MAR: a quarter of the samples");
+        assert!(
+            (d - 0.25).abs() < 1e-12,
+            "twice the MAR: a quarter of the samples"
+        );
     }
 
     #[test]

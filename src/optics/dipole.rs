@@ -32,7 +32,11 @@ pub fn fresnel_diffuse_reflectance(eta: f64) -> f64 {
 /// reflection even at η = 1, where there is no interface at all. cos θ is clamped into [0, 1]
 /// (rounding above 1 cannot make it negative); total internal reflection transmits nothing.
 pub fn fresnel_transmittance(eta: f64, cos_theta: f64) -> f64 {
-    let ci = if cos_theta.is_nan() { 0.0 } else { cos_theta.clamp(0.0, 1.0) };
+    let ci = if cos_theta.is_nan() {
+        0.0
+    } else {
+        cos_theta.clamp(0.0, 1.0)
+    };
     if ci <= 0.0 {
         return 0.0;
     }
@@ -66,7 +70,10 @@ impl Dipole {
     /// (σa ≥ σ's, as in Jensen's ketchup at green and blue) diffusion is a poor model but stays
     /// finite and dark (α' < ½), so it is allowed.
     pub fn new(sigma_s_prime: f64, sigma_a: f64, eta: f64) -> Result<Dipole, DipoleError> {
-        if !(sigma_s_prime.is_finite() && sigma_a.is_finite()) || sigma_s_prime < 0.0 || sigma_a < 0.0 {
+        if !(sigma_s_prime.is_finite() && sigma_a.is_finite())
+            || sigma_s_prime < 0.0
+            || sigma_a < 0.0
+        {
             return Err(DipoleError::NotFinite(sigma_s_prime, sigma_a));
         }
         if sigma_s_prime == 0.0 && sigma_a == 0.0 {
@@ -129,7 +136,10 @@ impl Dipole {
             cumulative.push(sum);
         }
         let target = fraction.clamp(0.0, 1.0) * sum;
-        let i = cumulative.iter().position(|c| *c >= target).unwrap_or(STEPS);
+        let i = cumulative
+            .iter()
+            .position(|c| *c >= target)
+            .unwrap_or(STEPS);
         r_at(i)
     }
 }
@@ -167,18 +177,35 @@ mod tests {
     #[test]
     fn profile_integrates_to_the_closed_form_total_reflectance() {
         // Marble, skin and whole milk (red channels, Jensen 2001) and extremes of albedo.
-        for (s, a) in [(2.19, 0.0021), (0.74, 0.032), (2.55, 0.0011), (1.0, 1e-6), (1.0, 0.5), (50.0, 10.0)] {
+        for (s, a) in [
+            (2.19, 0.0021),
+            (0.74, 0.032),
+            (2.55, 0.0011),
+            (1.0, 1e-6),
+            (1.0, 0.5),
+            (50.0, 10.0),
+        ] {
             for eta in [1.0, 1.3, 1.5, 0.8] {
                 let d = Dipole::new(s, a, eta).unwrap();
                 let (num, closed) = (integrate(&d), d.total_reflectance());
-                assert!((num - closed).abs() <= 2e-3 * closed.max(1e-3), "σ's {s} σa {a} η {eta}: ∫ {num} vs {closed}");
+                assert!(
+                    (num - closed).abs() <= 2e-3 * closed.max(1e-3),
+                    "σ's {s} σa {a} η {eta}: ∫ {num} vs {closed}"
+                );
             }
         }
     }
 
     #[test]
     fn profile_is_finite_positive_and_decreasing_at_the_extremes() {
-        let cases = [(2.19, 0.0021, 1.3), (1.0, 0.0, 1.3), (1e4, 1.0, 1.3), (1.0, 0.999, 1.0), (0.01, 1e-9, 0.7), (3.0, 0.1, 2.5)];
+        let cases = [
+            (2.19, 0.0021, 1.3),
+            (1.0, 0.0, 1.3),
+            (1e4, 1.0, 1.3),
+            (1.0, 0.999, 1.0),
+            (0.01, 1e-9, 0.7),
+            (3.0, 0.1, 2.5),
+        ];
         for (s, a, eta) in cases {
             let d = Dipole::new(s, a, eta).unwrap();
             let mut prev = f64::INFINITY;
@@ -186,7 +213,10 @@ mod tests {
                 let r = if i == 0 { 0.0 } else { 1e-4 * 1.1f64.powi(i) };
                 let v = d.rd(r);
                 assert!(v.is_finite() && v >= 0.0, "σ's {s} σa {a}: R_d({r}) = {v}");
-                assert!(v <= prev * (1.0 + 1e-12), "σ's {s} σa {a}: R_d rises at r = {r}");
+                assert!(
+                    v <= prev * (1.0 + 1e-12),
+                    "σ's {s} σa {a}: R_d rises at r = {r}"
+                );
                 prev = v;
             }
             assert!(d.rd(f64::NAN).is_finite() && d.rd(-1.0) == d.rd(1.0));
@@ -200,7 +230,10 @@ mod tests {
         let dense = Dipole::new(100.0, 10.0, 1.3).unwrap().reach(0.9);
         // Nine-tenths of marble's and skin's red light re-emerges within ~6.5 mm (measured
         // 6.38 and 6.61 mm); a dense, absorbing medium returns it within a tenth of a mm.
-        assert!(marble > 10.0 * dense && skin > 10.0 * dense, "marble {marble} skin {skin} dense {dense}");
+        assert!(
+            marble > 10.0 * dense && skin > 10.0 * dense,
+            "marble {marble} skin {skin} dense {dense}"
+        );
         assert!(dense < 0.1 && (5.0..8.0).contains(&marble) && (5.0..8.0).contains(&skin));
     }
 
@@ -208,7 +241,10 @@ mod tests {
     fn without_absorption_nothing_is_lost_except_at_the_boundary() {
         let d = Dipole::new(1.0, 0.0, 1.0).unwrap();
         assert_eq!(d.sigma_tr, 0.0);
-        assert!((d.total_reflectance() - 1.0).abs() < 1e-12, "α' = 1, η = 1: all light comes back");
+        assert!(
+            (d.total_reflectance() - 1.0).abs() < 1e-12,
+            "α' = 1, η = 1: all light comes back"
+        );
         // Energy never exceeds the incident light for any albedo and boundary.
         for a in [0.0, 1e-6, 0.01, 0.3] {
             for eta in [0.6, 1.0, 1.3, 2.0] {
@@ -221,21 +257,52 @@ mod tests {
     #[test]
     fn unusable_media_are_rejected_with_the_reason() {
         assert_eq!(Dipole::new(0.0, 0.0, 1.3), Err(DipoleError::Vacuum));
-        assert!(matches!(Dipole::new(0.0, 1.0, 1.3), Err(DipoleError::NoScattering { .. })));
-        assert!(Dipole::new(0.07, 0.97, 1.3).unwrap().total_reflectance() < 0.05, "ketchup green: dark, finite");
-        assert!(matches!(Dipole::new(f64::NAN, 1.0, 1.3), Err(DipoleError::NotFinite(..))));
-        assert!(matches!(Dipole::new(1.0, -0.1, 1.3), Err(DipoleError::NotFinite(..))));
-        assert!(matches!(Dipole::new(1.0, 0.1, 0.0), Err(DipoleError::Eta(_))));
+        assert!(matches!(
+            Dipole::new(0.0, 1.0, 1.3),
+            Err(DipoleError::NoScattering { .. })
+        ));
+        assert!(
+            Dipole::new(0.07, 0.97, 1.3).unwrap().total_reflectance() < 0.05,
+            "ketchup green: dark, finite"
+        );
+        assert!(matches!(
+            Dipole::new(f64::NAN, 1.0, 1.3),
+            Err(DipoleError::NotFinite(..))
+        ));
+        assert!(matches!(
+            Dipole::new(1.0, -0.1, 1.3),
+            Err(DipoleError::NotFinite(..))
+        ));
+        assert!(matches!(
+            Dipole::new(1.0, 0.1, 0.0),
+            Err(DipoleError::Eta(_))
+        ));
     }
 
     #[test]
     fn fresnel_terms_behave_at_matched_and_grazing_boundaries() {
-        assert!((fresnel_diffuse_reflectance(1.0) - 0.0016).abs() < 1e-4, "η = 1: almost no reflection");
-        assert!((fresnel_transmittance(1.0, 0.3) - 1.0).abs() < 1e-12, "η = 1: no interface");
-        assert!(fresnel_transmittance(0.7, 0.1) == 0.0, "total internal reflection");
-        assert!((fresnel_transmittance(1.5, 1.0) - 0.96).abs() < 1e-12, "F0(glass) = 0.04");
+        assert!(
+            (fresnel_diffuse_reflectance(1.0) - 0.0016).abs() < 1e-4,
+            "η = 1: almost no reflection"
+        );
+        assert!(
+            (fresnel_transmittance(1.0, 0.3) - 1.0).abs() < 1e-12,
+            "η = 1: no interface"
+        );
+        assert!(
+            fresnel_transmittance(0.7, 0.1) == 0.0,
+            "total internal reflection"
+        );
+        assert!(
+            (fresnel_transmittance(1.5, 1.0) - 0.96).abs() < 1e-12,
+            "F0(glass) = 0.04"
+        );
         assert_eq!(fresnel_transmittance(1.3, 0.0), 0.0);
-        assert_eq!(fresnel_transmittance(1.3, 1.0000001), fresnel_transmittance(1.3, 1.0), "cos > 1 from rounding");
+        assert_eq!(
+            fresnel_transmittance(1.3, 1.0000001),
+            fresnel_transmittance(1.3, 1.0),
+            "cos > 1 from rounding"
+        );
         assert!(fresnel_transmittance(1.3, f64::NAN).is_finite());
     }
 
@@ -247,7 +314,10 @@ mod tests {
         for r_cm in [0.1, 0.5, 1.0, 3.0] {
             let exact = d.rd(r_cm * 10.0);
             let rounded = d.rd((q(9.0 + r_cm) - q(9.0)) * 10.0);
-            assert!((rounded - exact).abs() <= 0.1 * exact, "r = {r_cm} cm: {rounded} vs {exact}");
+            assert!(
+                (rounded - exact).abs() <= 0.1 * exact,
+                "r = {r_cm} cm: {rounded} vs {exact}"
+            );
         }
     }
 }

@@ -40,7 +40,9 @@ pub fn saliency(albedo: &[[f32; 3]; 9], normal: &[[f32; 3]; 9]) -> f32 {
             }
         }
         // The Sobel weights sum to 8 across the kernel: /8 is a per-pixel derivative.
-        (0..3).map(|c| (g[0][c] * g[0][c] + g[1][c] * g[1][c]).sqrt() / 8.0).fold(0.0, f32::max)
+        (0..3)
+            .map(|c| (g[0][c] * g[0][c] + g[1][c] * g[1][c]).sqrt() / 8.0)
+            .fold(0.0, f32::max)
     };
     let lab = albedo.map(to_lab);
     let d_albedo = grad(lab) / ALBEDO_FULL;
@@ -55,7 +57,10 @@ mod tests {
     #[test]
     fn white_is_l100_and_black_is_l0() {
         let w = to_lab([1.0; 3]);
-        assert!((w[0] - 100.0).abs() < 0.1 && w[1].abs() < 0.5 && w[2].abs() < 0.5, "{w:?}");
+        assert!(
+            (w[0] - 100.0).abs() < 0.1 && w[1].abs() < 0.5 && w[2].abs() < 0.5,
+            "{w:?}"
+        );
         assert_eq!(to_lab([0.0; 3])[0], 0.0);
     }
 

@@ -30,7 +30,13 @@ mod tests {
 
     #[test]
     fn head_on_white_light_reflects_albedo_plus_ambient() {
-        let c = lambert(Vec3::Z * 3.0, Vec3::Z, Vec3::new(0.5, 0.25, 1.0), Vec3::ONE, 0.0);
+        let c = lambert(
+            Vec3::Z * 3.0,
+            Vec3::Z,
+            Vec3::new(0.5, 0.25, 1.0),
+            Vec3::ONE,
+            0.0,
+        );
         assert!((c - Vec3::new(0.5, 0.25, 1.0)).abs().max_element() < 1e-6);
     }
 }

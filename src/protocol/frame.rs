@@ -71,12 +71,18 @@ pub enum FrameDecodeError {
 
 /// Splits a binary frame message into its header and image bytes.
 pub fn decode_frame(bytes: &[u8]) -> Result<(FrameHeader, &[u8]), FrameDecodeError> {
-    let prefix: [u8; 4] =
-        bytes.get(..4).and_then(|b| b.try_into().ok()).ok_or(FrameDecodeError::Short(bytes.len()))?;
+    let prefix: [u8; 4] = bytes
+        .get(..4)
+        .and_then(|b| b.try_into().ok())
+        .ok_or(FrameDecodeError::Short(bytes.len()))?;
     let len = u32::from_le_bytes(prefix) as usize;
-    let end = 4usize.checked_add(len).filter(|&e| e <= bytes.len()).ok_or(
-        FrameDecodeError::HeaderPastEnd { len, total: bytes.len() },
-    )?;
+    let end = 4usize
+        .checked_add(len)
+        .filter(|&e| e <= bytes.len())
+        .ok_or(FrameDecodeError::HeaderPastEnd {
+            len,
+            total: bytes.len(),
+        })?;
     let header = serde_json::from_slice(&bytes[4..end])?;
     Ok((header, &bytes[end..]))
 }
@@ -98,7 +104,12 @@ mod tests {
             codec: Codec::Png,
             sampled: 1.0,
             samples: 17,
-            stages_ms: StageTimes { queue: 0.1, render: 2.0, readback: 0.5, encode: 1.25 },
+            stages_ms: StageTimes {
+                queue: 0.1,
+                render: 2.0,
+                readback: 0.5,
+                encode: 1.25,
+            },
             passes_ms: [("shade".to_string(), 0.75)].into_iter().collect(),
         };
         let image = [0xFFu8, 0xD8, 0x01, 0x02];
@@ -110,11 +121,17 @@ mod tests {
 
     #[test]
     fn truncated_frames_are_errors_not_panics() {
-        assert!(matches!(decode_frame(&[1, 0]), Err(FrameDecodeError::Short(2))));
+        assert!(matches!(
+            decode_frame(&[1, 0]),
+            Err(FrameDecodeError::Short(2))
+        ));
         assert!(matches!(
             decode_frame(&[200, 0, 0, 0, b'{']),
             Err(FrameDecodeError::HeaderPastEnd { len: 200, total: 5 })
         ));
-        assert!(matches!(decode_frame(&[1, 0, 0, 0, b'x']), Err(FrameDecodeError::Json(_))));
+        assert!(matches!(
+            decode_frame(&[1, 0, 0, 0, b'x']),
+            Err(FrameDecodeError::Json(_))
+        ));
     }
 }

@@ -78,7 +78,10 @@ pub struct Display {
 
 impl Default for Display {
     fn default() -> Self {
-        Self { width_cm: 53.0, distance_cm: 60.0 }
+        Self {
+            width_cm: 53.0,
+            distance_cm: 60.0,
+        }
     }
 }
 
@@ -215,6 +218,9 @@ impl ServerMessage {
 
 impl From<super::ProtocolError> for ServerMessage {
     fn from(e: super::ProtocolError) -> Self {
-        ServerMessage::Error(ErrorMessage { code: e.code, message: e.message })
+        ServerMessage::Error(ErrorMessage {
+            code: e.code,
+            message: e.message,
+        })
     }
 }

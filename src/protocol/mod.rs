@@ -13,7 +13,7 @@ pub use error::{ErrorCode, ProtocolError};
 pub use frame::{decode_frame, encode_frame, FrameHeader, GazeUsed, StageTimes};
 pub use limits::Limits;
 pub use messages::{
-    Ack, Codec, Display, ErrorMessage, Gaze, Hello, SceneInfo, ServerMessage, SettingsPatch, Welcome,
-    PROTOCOL_VERSION,
+    Ack, Codec, Display, ErrorMessage, Gaze, Hello, SceneInfo, ServerMessage, SettingsPatch,
+    Welcome, PROTOCOL_VERSION,
 };
 pub use parse::{parse_client_message, ClientMessage};

@@ -28,12 +28,18 @@ pub fn parse_client_message(text: &str, limits: &Limits) -> Result<ClientMessage
     }
     let value: Value = serde_json::from_str(text).map_err(|e| json_error(text, &e))?;
     let Value::Object(mut map) = value else {
-        return Err(ProtocolError::new(ErrorCode::BadJson, "a message must be a JSON object"));
+        return Err(ProtocolError::new(
+            ErrorCode::BadJson,
+            "a message must be a JSON object",
+        ));
     };
     let kind = match map.remove("type") {
         Some(Value::String(kind)) => kind,
         Some(_) => {
-            return Err(ProtocolError::new(ErrorCode::MissingType, "`type` must be a string"))
+            return Err(ProtocolError::new(
+                ErrorCode::MissingType,
+                "`type` must be a string",
+            ))
         }
         None => {
             return Err(ProtocolError::new(
@@ -81,7 +87,11 @@ fn fields<T: DeserializeOwned>(map: Map<String, Value>, kind: &str) -> Result<T,
 /// commonest way a tracker's invalid sample reaches us (Python's json.dumps writes them).
 fn json_error(text: &str, e: &serde_json::Error) -> ProtocolError {
     let line = text.lines().nth(e.line().saturating_sub(1)).unwrap_or("");
-    let at = line.char_indices().nth(e.column().saturating_sub(1)).map(|(i, _)| i).unwrap_or(0);
+    let at = line
+        .char_indices()
+        .nth(e.column().saturating_sub(1))
+        .map(|(i, _)| i)
+        .unwrap_or(0);
     let rest = line.get(at..).unwrap_or("");
     let rest = rest.trim_start_matches(['-', '+']);
     if rest.starts_with("NaN") || rest.starts_with("Infinity") || rest.starts_with("inf") {
@@ -100,7 +110,10 @@ fn finite(name: &str, v: f64) -> Result<f64, ProtocolError> {
     if v.is_finite() {
         Ok(v)
     } else {
-        Err(ProtocolError::new(ErrorCode::NotFinite, format!("{name} must be finite, got {v}")))
+        Err(ProtocolError::new(
+            ErrorCode::NotFinite,
+            format!("{name} must be finite, got {v}"),
+        ))
     }
 }
 
@@ -119,11 +132,13 @@ fn validate_hello(h: &Hello, limits: &Limits) -> Result<(), ProtocolError> {
     if h.v != PROTOCOL_VERSION {
         return Err(ProtocolError::new(
             ErrorCode::UnsupportedVersion,
-            format!("protocol version {} is not supported; this server speaks v{PROTOCOL_VERSION}", h.v),
+            format!(
+                "protocol version {} is not supported; this server speaks v{PROTOCOL_VERSION}",
+                h.v
+            ),
         ));
     }
-    if h.width == 0 || h.height == 0 || h.width > limits.max_width || h.height > limits.max_height
-    {
+    if h.width == 0 || h.height == 0 || h.width > limits.max_width || h.height > limits.max_height {
         return Err(ProtocolError::new(
             ErrorCode::OutOfRange,
             format!(
@@ -135,7 +150,12 @@ fn validate_hello(h: &Hello, limits: &Limits) -> Result<(), ProtocolError> {
     in_range("display.width_cm", h.display.width_cm, 1.0, 1000.0)?;
     in_range("display.distance_cm", h.display.distance_cm, 1.0, 10_000.0)?;
     in_range("quality", f64::from(h.quality), 1.0, 100.0)?;
-    in_range("max_in_flight", f64::from(h.max_in_flight), 1.0, f64::from(limits.max_in_flight))?;
+    in_range(
+        "max_in_flight",
+        f64::from(h.max_in_flight),
+        1.0,
+        f64::from(limits.max_in_flight),
+    )?;
     Ok(())
 }
 
@@ -196,7 +216,13 @@ mod tests {
 
     #[test]
     fn gaze_round_trips_through_json() {
-        let g = Gaze { seq: 17, t_ms: 12345.5, x: 0.25, y: 1.0, pupil_mm: Some(3.8) };
+        let g = Gaze {
+            seq: 17,
+            t_ms: 12345.5,
+            x: 0.25,
+            y: 1.0,
+            pupil_mm: Some(3.8),
+        };
         let mut v = serde_json::to_value(g).unwrap();
         v["type"] = "gaze".into();
         let m = parse_client_message(&v.to_string(), &Limits::default()).unwrap();
@@ -210,23 +236,56 @@ mod tests {
         assert_eq!(code(r#"{"seq":1}"#), ErrorCode::MissingType);
         assert_eq!(code(r#"{"type":5}"#), ErrorCode::MissingType);
         assert_eq!(code(r#"{"type":"teleport"}"#), ErrorCode::UnknownType);
-        assert_eq!(code(r#"{"type":"gaze","seq":1,"t_ms":0,"x":0.5}"#), ErrorCode::BadField);
-        assert_eq!(code(r#"{"type":"gaze","seq":1,"t_ms":0,"x":0.5,"y":null}"#), ErrorCode::BadField);
+        assert_eq!(
+            code(r#"{"type":"gaze","seq":1,"t_ms":0,"x":0.5}"#),
+            ErrorCode::BadField
+        );
+        assert_eq!(
+            code(r#"{"type":"gaze","seq":1,"t_ms":0,"x":0.5,"y":null}"#),
+            ErrorCode::BadField
+        );
         assert_eq!(code(r#"{"type":"hello","widht":64}"#), ErrorCode::BadField);
-        assert_eq!(code(r#"{"type":"gaze","seq":1,"t_ms":0,"x":NaN,"y":0.5}"#), ErrorCode::NotFinite);
-        assert_eq!(code(r#"{"type":"gaze","seq":1,"t_ms":0,"x":-Infinity,"y":0.5}"#), ErrorCode::NotFinite);
-        assert_eq!(code(r#"{"type":"gaze","seq":1,"t_ms":0,"x":1e999,"y":0.5}"#), ErrorCode::NotFinite);
-        assert_eq!(code(r#"{"type":"gaze","seq":1,"t_ms":0,"x":1.01,"y":0.5}"#), ErrorCode::OutOfRange);
-        assert_eq!(code(r#"{"type":"gaze","seq":1,"t_ms":0,"x":0.5,"y":-0.001}"#), ErrorCode::OutOfRange);
+        assert_eq!(
+            code(r#"{"type":"gaze","seq":1,"t_ms":0,"x":NaN,"y":0.5}"#),
+            ErrorCode::NotFinite
+        );
+        assert_eq!(
+            code(r#"{"type":"gaze","seq":1,"t_ms":0,"x":-Infinity,"y":0.5}"#),
+            ErrorCode::NotFinite
+        );
+        assert_eq!(
+            code(r#"{"type":"gaze","seq":1,"t_ms":0,"x":1e999,"y":0.5}"#),
+            ErrorCode::NotFinite
+        );
+        assert_eq!(
+            code(r#"{"type":"gaze","seq":1,"t_ms":0,"x":1.01,"y":0.5}"#),
+            ErrorCode::OutOfRange
+        );
+        assert_eq!(
+            code(r#"{"type":"gaze","seq":1,"t_ms":0,"x":0.5,"y":-0.001}"#),
+            ErrorCode::OutOfRange
+        );
         assert_eq!(
             code(r#"{"type":"gaze","seq":1,"t_ms":0,"x":0.5,"y":0.5,"pupil_mm":0.5}"#),
             ErrorCode::OutOfRange
         );
         assert_eq!(code(r#"{"type":"hello","width":0}"#), ErrorCode::OutOfRange);
-        assert_eq!(code(r#"{"type":"hello","width":100000,"height":10}"#), ErrorCode::OutOfRange);
-        assert_eq!(code(r#"{"type":"hello","max_in_flight":0}"#), ErrorCode::OutOfRange);
-        assert_eq!(code(r#"{"type":"hello","v":2}"#), ErrorCode::UnsupportedVersion);
-        assert_eq!(code(r#"{"type":"hello","codec":"gif"}"#), ErrorCode::BadField);
+        assert_eq!(
+            code(r#"{"type":"hello","width":100000,"height":10}"#),
+            ErrorCode::OutOfRange
+        );
+        assert_eq!(
+            code(r#"{"type":"hello","max_in_flight":0}"#),
+            ErrorCode::OutOfRange
+        );
+        assert_eq!(
+            code(r#"{"type":"hello","v":2}"#),
+            ErrorCode::UnsupportedVersion
+        );
+        assert_eq!(
+            code(r#"{"type":"hello","codec":"gif"}"#),
+            ErrorCode::BadField
+        );
         let big = format!(r#"{{"type":"hello","scene":"{}"}}"#, "a".repeat(5000));
         assert_eq!(code(&big), ErrorCode::TooLarge);
     }
@@ -234,8 +293,12 @@ mod tests {
     #[test]
     fn gaze_on_the_exact_border_is_valid() {
         for (x, y) in [(0.0, 0.0), (1.0, 1.0), (0.0, 1.0), (1.0, 0.0)] {
-            let text = format!(r#"{{"type":"gaze","seq":3,"t_ms":1.5,"x":{x},"y":{y},"pupil_mm":10}}"#);
-            assert!(parse_client_message(&text, &Limits::default()).is_ok(), "{text}");
+            let text =
+                format!(r#"{{"type":"gaze","seq":3,"t_ms":1.5,"x":{x},"y":{y},"pupil_mm":10}}"#);
+            assert!(
+                parse_client_message(&text, &Limits::default()).is_ok(),
+                "{text}"
+            );
         }
     }
 }

@@ -10,10 +10,18 @@ pub fn pixels_per_degree(v: &Viewing) -> f32 {
 
 /// Per-pixel FLIP error in [0, 1] of `test` against `reference` (sRGB RGBA8, same size).
 pub fn flip_map(reference: &[u8], test: &[u8], width: u32, height: u32, ppd: f32) -> Vec<f64> {
-    let rgb = |img: &[u8]| -> Vec<u8> { img.chunks_exact(4).flat_map(|p| [p[0], p[1], p[2]]).collect() };
+    let rgb = |img: &[u8]| -> Vec<u8> {
+        img.chunks_exact(4)
+            .flat_map(|p| [p[0], p[1], p[2]])
+            .collect()
+    };
     let r = nv_flip::FlipImageRgb8::with_data(width, height, &rgb(reference));
     let t = nv_flip::FlipImageRgb8::with_data(width, height, &rgb(test));
-    nv_flip::flip(r, t, ppd).to_vec().into_iter().map(f64::from).collect()
+    nv_flip::flip(r, t, ppd)
+        .to_vec()
+        .into_iter()
+        .map(f64::from)
+        .collect()
 }
 
 #[cfg(test)]
@@ -54,7 +62,10 @@ mod tests {
         for (ppd, expected) in [(67.0f32, 0.209_896_19), (12.6, 0.193_909_42)] {
             let m = flip_map(&r, &t, 48, 32, ppd);
             let mean = m.iter().sum::<f64>() / m.len() as f64;
-            assert!((mean - expected).abs() < 1e-4, "ppd {ppd}: {mean} vs {expected}");
+            assert!(
+                (mean - expected).abs() < 1e-4,
+                "ppd {ppd}: {mean} vs {expected}"
+            );
         }
     }
 }

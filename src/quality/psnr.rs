@@ -13,8 +13,15 @@ pub fn psnr(reference: &[u8], test: &[u8]) -> f64 {
 /// `f64::INFINITY` when the weighted error is zero (including when every weight is zero).
 pub fn psnr_weighted(reference: &[u8], test: &[u8], weights: &[f64]) -> f64 {
     let (mut se, mut wsum) = (0.0f64, 0.0f64);
-    for ((r, t), w) in reference.chunks_exact(4).zip(test.chunks_exact(4)).zip(weights) {
-        let e: f64 = (0..3).map(|c| (f64::from(r[c]) - f64::from(t[c])).powi(2)).sum::<f64>() / 3.0;
+    for ((r, t), w) in reference
+        .chunks_exact(4)
+        .zip(test.chunks_exact(4))
+        .zip(weights)
+    {
+        let e: f64 = (0..3)
+            .map(|c| (f64::from(r[c]) - f64::from(t[c])).powi(2))
+            .sum::<f64>()
+            / 3.0;
         se += w * e;
         wsum += w;
     }
@@ -39,7 +46,11 @@ mod tests {
     #[test]
     fn a_uniform_error_of_one_level_gives_48_13_db() {
         let a = vec![100u8; 64 * 4];
-        let b: Vec<u8> = a.iter().enumerate().map(|(i, v)| if i % 4 == 3 { *v } else { v + 1 }).collect();
+        let b: Vec<u8> = a
+            .iter()
+            .enumerate()
+            .map(|(i, v)| if i % 4 == 3 { *v } else { v + 1 })
+            .collect();
         // MSE = 1 → 10·log10(255²) = 48.1308 dB.
         assert!((psnr(&a, &b) - 48.1308).abs() < 1e-3);
     }

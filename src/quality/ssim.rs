@@ -16,7 +16,9 @@ pub fn ssim_map(reference: &[u8], test: &[u8], width: u32, height: u32) -> Vec<f
     let (w, h) = (width as i32, height as i32);
     let x: Vec<f64> = reference.chunks_exact(4).map(luma).collect();
     let y: Vec<f64> = test.chunks_exact(4).map(luma).collect();
-    let kernel: Vec<f64> = (-RADIUS..=RADIUS).map(|i| (-(f64::from(i * i)) / (2.0 * SIGMA * SIGMA)).exp()).collect();
+    let kernel: Vec<f64> = (-RADIUS..=RADIUS)
+        .map(|i| (-(f64::from(i * i)) / (2.0 * SIGMA * SIGMA)).exp())
+        .collect();
     // Separable Gaussian moments: blur x, y, x², y², xy horizontally then vertically.
     let fields: [Vec<f64>; 5] = [
         x.clone(),
@@ -66,8 +68,12 @@ mod tests {
 
     #[test]
     fn identical_images_have_ssim_one() {
-        let img: Vec<u8> = (0..32 * 24).flat_map(|k| [(k * 7 % 256) as u8, (k % 200) as u8, 9, 255]).collect();
-        assert!(ssim_map(&img, &img, 32, 24).iter().all(|s| (s - 1.0).abs() < 1e-12));
+        let img: Vec<u8> = (0..32 * 24)
+            .flat_map(|k| [(k * 7 % 256) as u8, (k % 200) as u8, 9, 255])
+            .collect();
+        assert!(ssim_map(&img, &img, 32, 24)
+            .iter()
+            .all(|s| (s - 1.0).abs() < 1e-12));
     }
 
     #[test]
@@ -82,15 +88,35 @@ mod tests {
 
     #[test]
     fn noise_lowers_ssim_more_than_a_small_offset() {
-        let base: Vec<u8> = (0..40 * 40).flat_map(|k| { let v = (k % 40 * 5) as u8; [v, v, v, 255] }).collect();
-        let offset: Vec<u8> = base.iter().enumerate().map(|(i, v)| if i % 4 == 3 { *v } else { v.saturating_add(3) }).collect();
+        let base: Vec<u8> = (0..40 * 40)
+            .flat_map(|k| {
+                let v = (k % 40 * 5) as u8;
+                [v, v, v, 255]
+            })
+            .collect();
+        let offset: Vec<u8> = base
+            .iter()
+            .enumerate()
+            .map(|(i, v)| if i % 4 == 3 { *v } else { v.saturating_add(3) })
+            .collect();
         let noisy: Vec<u8> = base
             .iter()
             .enumerate()
-            .map(|(i, v)| if i % 4 == 3 { *v } else if (i / 4 * 2654435761usize) % 7 < 3 { v.saturating_add(25) } else { *v })
+            .map(|(i, v)| {
+                if i % 4 == 3 {
+                    *v
+                } else if (i / 4 * 2654435761usize) % 7 < 3 {
+                    v.saturating_add(25)
+                } else {
+                    *v
+                }
+            })
             .collect();
         let mean = |m: Vec<f64>| m.iter().sum::<f64>() / m.len() as f64;
-        let (so, sn) = (mean(ssim_map(&base, &offset, 40, 40)), mean(ssim_map(&base, &noisy, 40, 40)));
+        let (so, sn) = (
+            mean(ssim_map(&base, &offset, 40, 40)),
+            mean(ssim_map(&base, &noisy, 40, 40)),
+        );
         assert!(so > 0.99 && sn < so - 0.1, "offset {so}, noise {sn}");
     }
 }

@@ -16,14 +16,23 @@ pub struct ReferenceImage {
     pub covered: Vec<bool>,
 }
 
-pub fn render_reference(scene: &Scene, width: u32, height: u32, to_light: Option<Vec3>) -> ReferenceImage {
+pub fn render_reference(
+    scene: &Scene,
+    width: u32,
+    height: u32,
+    to_light: Option<Vec3>,
+) -> ReferenceImage {
     let n = (width * height) as usize;
     let mut depth = vec![f32::INFINITY; n];
     let mut normal = vec![Vec3::ZERO; n];
     let mut material = vec![0u32; n];
     let view_proj = scene.file.camera.view_proj(width, height);
     let mesh = &scene.mesh;
-    let clip: Vec<Vec4> = mesh.positions.iter().map(|p| view_proj * p.extend(1.0)).collect();
+    let clip: Vec<Vec4> = mesh
+        .positions
+        .iter()
+        .map(|p| view_proj * p.extend(1.0))
+        .collect();
     let (wf, hf) = (width as f32, height as f32);
     for tri in mesh.indices.chunks_exact(3) {
         let idx = [tri[0], tri[1], tri[2]].map(|i| i as usize);
@@ -53,7 +62,11 @@ pub fn render_reference(scene: &Scene, width: u32, height: u32, to_light: Option
         for y in y0..=y1 as u32 {
             for x in x0..=x1 as u32 {
                 let p = Vec3::new(x as f32 + 0.5, y as f32 + 0.5, 0.0);
-                let b = [edge(s[1], s[2], p) / area, edge(s[2], s[0], p) / area, edge(s[0], s[1], p) / area];
+                let b = [
+                    edge(s[1], s[2], p) / area,
+                    edge(s[2], s[0], p) / area,
+                    edge(s[0], s[1], p) / area,
+                ];
                 if b.iter().any(|&v| v < 0.0) {
                     continue;
                 }
@@ -75,7 +88,9 @@ pub fn render_reference(scene: &Scene, width: u32, height: u32, to_light: Option
         }
     }
     let light = &scene.file.light;
-    let to_light = to_light.and_then(|l| l.try_normalize()).unwrap_or(Vec3::from(light.to_light));
+    let to_light = to_light
+        .and_then(|l| l.try_normalize())
+        .unwrap_or(Vec3::from(light.to_light));
     let background = scene.file.background_srgb;
     let mut rgba = Vec::with_capacity(n * 4);
     let mut covered = Vec::with_capacity(n);
@@ -84,11 +99,21 @@ pub fn render_reference(scene: &Scene, width: u32, height: u32, to_light: Option
             let c = lambert(
                 normal[k],
                 to_light,
-                Vec3::from(scene.materials[material[k] as usize].1.albedo().map(|a| a as f32)),
+                Vec3::from(
+                    scene.materials[material[k] as usize]
+                        .1
+                        .albedo()
+                        .map(|a| a as f32),
+                ),
                 Vec3::from(light.color) * light.intensity,
                 scene.file.ambient,
             );
-            rgba.extend_from_slice(&[linear_to_srgb8(c.x), linear_to_srgb8(c.y), linear_to_srgb8(c.z), 255]);
+            rgba.extend_from_slice(&[
+                linear_to_srgb8(c.x),
+                linear_to_srgb8(c.y),
+                linear_to_srgb8(c.z),
+                255,
+            ]);
             covered.push(true);
         } else {
             // Round-trip so the reference background is exactly what an sRGB clear produces.
@@ -97,7 +122,12 @@ pub fn render_reference(scene: &Scene, width: u32, height: u32, to_light: Option
             covered.push(false);
         }
     }
-    ReferenceImage { width, height, rgba, covered }
+    ReferenceImage {
+        width,
+        height,
+        rgba,
+        covered,
+    }
 }
 
 fn edge(a: Vec3, b: Vec3, p: Vec3) -> f32 {

@@ -21,7 +21,10 @@ impl Gpu {
         // prints display-server complaints on headless machines.
         let tiers = match wgpu::Backends::from_env() {
             Some(b) => vec![b],
-            None => vec![wgpu::Backends::VULKAN | wgpu::Backends::METAL | wgpu::Backends::DX12, wgpu::Backends::GL],
+            None => vec![
+                wgpu::Backends::VULKAN | wgpu::Backends::METAL | wgpu::Backends::DX12,
+                wgpu::Backends::GL,
+            ],
         };
         let mut tried = wgpu::Backends::empty();
         let mut chosen = None;
@@ -40,7 +43,8 @@ impl Gpu {
                 break;
             }
         }
-        let adapter = chosen.ok_or_else(|| RenderError::NoAdapter(format!("tried backends {tried:?}")))?;
+        let adapter =
+            chosen.ok_or_else(|| RenderError::NoAdapter(format!("tried backends {tried:?}")))?;
         let info = adapter.get_info();
         // Timestamps time each pass; without them only whole frames are timed.
         let required_features = adapter.features() & wgpu::Features::TIMESTAMP_QUERY;
@@ -52,7 +56,10 @@ impl Gpu {
                 ..Default::default()
             })
             .await
-            .map_err(|source| RenderError::Device { adapter: info.name.clone(), source })?;
+            .map_err(|source| RenderError::Device {
+                adapter: info.name.clone(),
+                source,
+            })?;
         // Errors are caught per frame with error scopes; anything that escapes one is logged
         // rather than panicking the render thread that every session shares.
         device.on_uncaptured_error(Arc::new(|e| tracing::error!("uncaptured GPU error: {e:?}")));
@@ -64,13 +71,20 @@ impl Gpu {
             driver_info = %info.driver_info,
             "GPU adapter chosen"
         );
-        Ok(Gpu { device, queue, info })
+        Ok(Gpu {
+            device,
+            queue,
+            info,
+        })
     }
 
     /// One line naming the adapter, for logs, `welcome` and benchmark reports.
     pub fn summary(&self) -> String {
         let i = &self.info;
-        format!("{} ({:?}, {:?}, {} {})", i.name, i.backend, i.device_type, i.driver, i.driver_info)
+        format!(
+            "{} ({:?}, {:?}, {} {})",
+            i.name, i.backend, i.device_type, i.driver, i.driver_info
+        )
     }
 }
 

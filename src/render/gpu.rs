@@ -59,8 +59,15 @@ pub fn storage_buffer(binding: u32, read_only: bool) -> wgpu::BindGroupLayoutEnt
     }
 }
 
-pub fn layout(device: &wgpu::Device, label: &str, entries: &[wgpu::BindGroupLayoutEntry]) -> wgpu::BindGroupLayout {
-    device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor { label: Some(label), entries })
+pub fn layout(
+    device: &wgpu::Device,
+    label: &str,
+    entries: &[wgpu::BindGroupLayoutEntry],
+) -> wgpu::BindGroupLayout {
+    device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+        label: Some(label),
+        entries,
+    })
 }
 
 /// Binds `resources[i]` to binding i.
@@ -73,9 +80,16 @@ pub fn bind(
     let entries: Vec<wgpu::BindGroupEntry> = resources
         .iter()
         .enumerate()
-        .map(|(i, r)| wgpu::BindGroupEntry { binding: i as u32, resource: r.clone() })
+        .map(|(i, r)| wgpu::BindGroupEntry {
+            binding: i as u32,
+            resource: r.clone(),
+        })
         .collect();
-    device.create_bind_group(&wgpu::BindGroupDescriptor { label: Some(label), layout, entries: &entries })
+    device.create_bind_group(&wgpu::BindGroupDescriptor {
+        label: Some(label),
+        layout,
+        entries: &entries,
+    })
 }
 
 /// Binds resources to the given binding numbers (for layouts with gaps).
@@ -85,9 +99,18 @@ pub fn bind_at(
     layout: &wgpu::BindGroupLayout,
     resources: &[(u32, wgpu::BindingResource)],
 ) -> wgpu::BindGroup {
-    let entries: Vec<wgpu::BindGroupEntry> =
-        resources.iter().map(|(b, r)| wgpu::BindGroupEntry { binding: *b, resource: r.clone() }).collect();
-    device.create_bind_group(&wgpu::BindGroupDescriptor { label: Some(label), layout, entries: &entries })
+    let entries: Vec<wgpu::BindGroupEntry> = resources
+        .iter()
+        .map(|(b, r)| wgpu::BindGroupEntry {
+            binding: *b,
+            resource: r.clone(),
+        })
+        .collect();
+    device.create_bind_group(&wgpu::BindGroupDescriptor {
+        label: Some(label),
+        layout,
+        entries: &entries,
+    })
 }
 
 pub fn compute_pipeline(
@@ -121,7 +144,10 @@ pub fn dispatch_frame(
     size: (u32, u32),
     timer: &mut PassTimer,
 ) {
-    let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor { label: Some(label), timestamp_writes: timer.compute(label) });
+    let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+        label: Some(label),
+        timestamp_writes: timer.compute(label),
+    });
     pass.set_pipeline(pipeline);
     pass.set_bind_group(0, bind_group, &[]);
     pass.dispatch_workgroups(size.0.div_ceil(8), size.1.div_ceil(8), 1);
@@ -140,7 +166,11 @@ pub fn texture_2d(
 ) -> wgpu::Texture {
     device.create_texture(&wgpu::TextureDescriptor {
         label: Some(label),
-        size: wgpu::Extent3d { width: size.0, height: size.1, depth_or_array_layers: 1 },
+        size: wgpu::Extent3d {
+            width: size.0,
+            height: size.1,
+            depth_or_array_layers: 1,
+        },
         mip_level_count: 1,
         sample_count: 1,
         dimension: wgpu::TextureDimension::D2,
@@ -167,14 +197,28 @@ impl FramePass {
         let module = shader(device, label, source);
         let layout = layout(device, label, entries);
         let pipeline = compute_pipeline(device, label, &module, "main", &layout);
-        FramePass { label, pipeline, layout }
+        FramePass {
+            label,
+            pipeline,
+            layout,
+        }
     }
 
-    pub fn bind(&self, device: &wgpu::Device, resources: &[wgpu::BindingResource]) -> wgpu::BindGroup {
+    pub fn bind(
+        &self,
+        device: &wgpu::Device,
+        resources: &[wgpu::BindingResource],
+    ) -> wgpu::BindGroup {
         bind(device, self.label, &self.layout, resources)
     }
 
-    pub fn encode(&self, encoder: &mut wgpu::CommandEncoder, bind_group: &wgpu::BindGroup, size: (u32, u32), timer: &mut PassTimer) {
+    pub fn encode(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        bind_group: &wgpu::BindGroup,
+        size: (u32, u32),
+        timer: &mut PassTimer,
+    ) {
         dispatch_frame(encoder, self.label, &self.pipeline, bind_group, size, timer);
     }
 }

@@ -30,7 +30,11 @@ pub fn gpu_materials(scene: &Scene, plan: Option<&Plan>) -> Vec<GpuMaterial> {
             let albedo = m.albedo();
             let rgba = |v: [f64; 3]| [v[0] as f32, v[1] as f32, v[2] as f32, 0.0];
             match m {
-                Material::Opaque { .. } => GpuMaterial { albedo: rgba(albedo), eta: 1.0, ..Default::default() },
+                Material::Opaque { .. } => GpuMaterial {
+                    albedo: rgba(albedo),
+                    eta: 1.0,
+                    ..Default::default()
+                },
                 Material::Translucent { eta, dipole, .. } => GpuMaterial {
                     kind: 1,
                     subsurface: plan.map(|p| p.subsurface(id)).unwrap_or(true) as u32,
@@ -57,7 +61,11 @@ pub fn upload(device: &wgpu::Device, label: &str, materials: &[GpuMaterial]) -> 
 
 /// Each material's subsurface reach in mm, as vec4s (x used), for the screen-space rung.
 pub fn upload_reach(device: &wgpu::Device, scene: &Scene) -> wgpu::Buffer {
-    let reach: Vec<[f32; 4]> = scene.materials.iter().map(|(_, m)| [m.reach_mm() as f32, 0.0, 0.0, 0.0]).collect();
+    let reach: Vec<[f32; 4]> = scene
+        .materials
+        .iter()
+        .map(|(_, m)| [m.reach_mm() as f32, 0.0, 0.0, 0.0])
+        .collect();
     device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
         label: Some("materials.reach"),
         contents: bytemuck::cast_slice(&reach),

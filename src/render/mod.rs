@@ -29,7 +29,10 @@ pub enum RenderError {
     )]
     NoAdapter(String),
     #[error("could not open the GPU device on {adapter}: {source}")]
-    Device { adapter: String, source: wgpu::RequestDeviceError },
+    Device {
+        adapter: String,
+        source: wgpu::RequestDeviceError,
+    },
     #[error(transparent)]
     Scene(#[from] crate::scene::SceneError),
     #[error("frame size {width}x{height} is not renderable (1 ..= {max} per side)")]

@@ -171,11 +171,27 @@ impl Renderer {
         gpu.queue.write_texture(
             rank.as_image_copy(),
             bytemuck::cast_slice(&rank_map::thresholds()),
-            wgpu::TexelCopyBufferLayout { offset: 0, bytes_per_row: Some(side * 4), rows_per_image: Some(side) },
-            wgpu::Extent3d { width: side, height: side, depth_or_array_layers: 1 },
+            wgpu::TexelCopyBufferLayout {
+                offset: 0,
+                bytes_per_row: Some(side * 4),
+                rows_per_image: Some(side),
+            },
+            wgpu::Extent3d {
+                width: side,
+                height: side,
+                depth_or_array_layers: 1,
+            },
         );
         let timer = PassTimer::new(d, &gpu.queue);
-        Renderer { passes, rank_map: gpu::view(&rank), gpu, scenes: HashMap::new(), targets: Vec::new(), timer, pyramid_builds: 0 }
+        Renderer {
+            passes,
+            rank_map: gpu::view(&rank),
+            gpu,
+            scenes: HashMap::new(),
+            targets: Vec::new(),
+            timer,
+            pyramid_builds: 0,
+        }
     }
 
     pub fn adapter(&self) -> String {
@@ -208,9 +224,15 @@ impl Renderer {
         let name = scene.name().to_string();
         let d = &self.gpu.device;
         let mesh = self.passes.gbuffer.upload(d, &scene);
-        let materials = super::materials::upload(d, "materials.scene", &super::materials::gpu_materials(&scene, None));
+        let materials = super::materials::upload(
+            d,
+            "materials.scene",
+            &super::materials::gpu_materials(&scene, None),
+        );
         let reach = super::materials::upload_reach(d, &scene);
-        let photons = scene.has_translucency().then(|| self.passes.photons.create_map(d, &materials));
+        let photons = scene
+            .has_translucency()
+            .then(|| self.passes.photons.create_map(d, &materials));
         let no_photons = d.create_buffer(&wgpu::BufferDescriptor {
             label: Some("pyramid.none"),
             size: 32,
@@ -218,7 +240,17 @@ impl Renderer {
             mapped_at_creation: false,
         });
         tracing::info!(scene = %name, triangles = scene.mesh.triangle_count(), translucent = scene.has_translucency(), "scene loaded");
-        self.scenes.insert(name, SceneGpu { scene, mesh, materials, reach, photons, no_photons });
+        self.scenes.insert(
+            name,
+            SceneGpu {
+                scene,
+                mesh,
+                materials,
+                reach,
+                photons,
+                no_photons,
+            },
+        );
     }
 
     /// How many times a photon pyramid has been built (static scenes: once per scene).
@@ -234,7 +266,11 @@ impl Renderer {
     pub fn render(&mut self, req: &FrameRequest) -> Result<RenderedFrame, RenderError> {
         let (w, h) = (req.width, req.height);
         if w == 0 || h == 0 || w > MAX_SIDE || h > MAX_SIDE {
-            return Err(RenderError::Size { width: w, height: h, max: MAX_SIDE });
+            return Err(RenderError::Size {
+                width: w,
+                height: h,
+                max: MAX_SIDE,
+            });
         }
         self.load_scene(&req.scene)?;
         let started = Instant::now();
@@ -242,7 +278,9 @@ impl Renderer {
         let rung = req.settings.translucency.rung;
         let to_light = {
             let scene = &self.scenes[&req.scene].scene;
-            req.to_light.and_then(|l| l.try_normalize()).unwrap_or_else(|| scene.file.light.to_light_at(req.time_s))
+            req.to_light
+                .and_then(|l| l.try_normalize())
+                .unwrap_or_else(|| scene.file.light.to_light_at(req.time_s))
         };
         let sg = self.scenes.get_mut(&req.scene).expect("loaded above");
         let mut photon_encoder = None;
@@ -250,15 +288,31 @@ impl Renderer {
         if let Some(map) = sg.photons.as_mut() {
             let plan_needs = self.targets[ti].1.needs_dipole;
             if rung >= Rung::Hierarchical && plan_needs && map.built_for != Some(to_light) {
-                let mut enc = self.gpu.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("photons") });
-                self.passes.photons.build(&self.gpu.queue, &mut enc, map, &sg.scene, &sg.mesh, to_light, &mut self.timer);
+                let mut enc =
+                    self.gpu
+                        .device
+                        .create_command_encoder(&wgpu::CommandEncoderDescriptor {
+                            label: Some("photons"),
+                        });
+                self.passes.photons.build(
+                    &self.gpu.queue,
+                    &mut enc,
+                    map,
+                    &sg.scene,
+                    &sg.mesh,
+                    to_light,
+                    &mut self.timer,
+                );
                 self.pyramid_builds += 1;
                 photon_encoder = Some(enc.finish());
             }
         }
         let sg = &self.scenes[&req.scene];
         let (scene, mesh) = (&sg.scene, &sg.mesh);
-        let pyramid_ready = sg.photons.as_ref().is_some_and(|m| m.built_for == Some(to_light));
+        let pyramid_ready = sg
+            .photons
+            .as_ref()
+            .is_some_and(|m| m.built_for == Some(to_light));
         let t = &self.targets[ti].1;
         let device = &self.gpu.device;
         let queue = &self.gpu.queue;
@@ -269,27 +323,39 @@ impl Renderer {
         queue.write_buffer(&t.uniform, 0, bytemuck::bytes_of(&uniform));
 
         let scope = device.push_error_scope(wgpu::ErrorFilter::Validation);
-        let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("frame") });
+        let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
+            label: Some("frame"),
+        });
         let (nd, albedo, blurred) = t.gbuffer_views();
-        let targets = GBufferTargets { normal_distance: &nd, albedo: &albedo, blurred_normal: &blurred, depth: &t.depth };
+        let targets = GBufferTargets {
+            normal_distance: &nd,
+            albedo: &albedo,
+            blurred_normal: &blurred,
+            depth: &t.depth,
+        };
         let p = &self.passes;
         let size = (w, h);
         let timer = &mut self.timer;
-        p.gbuffer.encode(&mut encoder, &targets, &t.bind.gbuffer, mesh, timer);
+        p.gbuffer
+            .encode(&mut encoder, &targets, &t.bind.gbuffer, mesh, timer);
         if rung == Rung::Screen && t.needs_dipole {
             let [a, b, c] = &t.bind.screen_diffusion;
-            p.screen_diffusion.encode(&mut encoder, [a, b, c], size, timer);
+            p.screen_diffusion
+                .encode(&mut encoder, [a, b, c], size, timer);
         }
         if fov.enabled {
             encoder.clear_buffer(&t.counter, 0, None);
-            p.sampling.encode(&mut encoder, &t.bind.sampling, size, timer);
+            p.sampling
+                .encode(&mut encoder, &t.bind.sampling, size, timer);
             // The list also counts the samples (the header's `sampled`), so it is built either way;
             // without compaction the shading pass masks a full-frame dispatch instead of using it.
             p.compact.encode(&mut encoder, &t.bind.compact, size, timer);
             if fov.compaction {
-                p.shade.encode_list(&mut encoder, &t.bind.shade, &t.counter, timer);
+                p.shade
+                    .encode_list(&mut encoder, &t.bind.shade, &t.counter, timer);
             } else {
-                p.shade.encode_grid(&mut encoder, &t.bind.shade, size, timer);
+                p.shade
+                    .encode_grid(&mut encoder, &t.bind.shade, size, timer);
             }
             let steps = fov.jfa_steps(w, h, MIN_XI);
             t.write_jfa_steps(queue, &steps);
@@ -297,11 +363,16 @@ impl Renderer {
             p.jfa.encode(&mut encoder, &jfa, size, timer);
             p.resolve.encode(&mut encoder, &t.bind.resolve, size, timer);
         } else {
-            p.shade.encode_grid(&mut encoder, &t.bind.shade, size, timer);
+            p.shade
+                .encode_grid(&mut encoder, &t.bind.shade, size, timer);
         }
         let output = match (settings.dof, fov.enabled) {
             (true, foveated) => {
-                let from = if foveated { &t.bind.dof_from_resolved } else { &t.bind.dof_from_color };
+                let from = if foveated {
+                    &t.bind.dof_from_resolved
+                } else {
+                    &t.bind.dof_from_color
+                };
                 p.dof.encode(&mut encoder, from, size, timer);
                 &t.bind.output_dof
             }
@@ -313,7 +384,10 @@ impl Renderer {
         timer.resolve(&mut encoder);
         let submission = queue.submit(photon_encoder.into_iter().chain([encoder.finish()]));
         device
-            .poll(wgpu::PollType::Wait { submission_index: Some(submission.clone()), timeout: None })
+            .poll(wgpu::PollType::Wait {
+                submission_index: Some(submission.clone()),
+                timeout: None,
+            })
             .map_err(|e| RenderError::Gpu(format!("waiting for the frame: {e}")))?;
         if let Some(e) = pollster::block_on(scope.pop()) {
             return Err(RenderError::Gpu(e.to_string()));
@@ -324,7 +398,11 @@ impl Renderer {
         let started = Instant::now();
         let (rgba, count) = t.read_back(device, queue)?;
         let readback_ms = started.elapsed().as_secs_f64() * 1e3;
-        let sampled = if fov.enabled { f64::from(count) / (f64::from(w) * f64::from(h)) } else { 1.0 };
+        let sampled = if fov.enabled {
+            f64::from(count) / (f64::from(w) * f64::from(h))
+        } else {
+            1.0
+        };
 
         let view_proj = camera.view_proj(w, h);
         let t = &mut self.targets[ti].1;
@@ -332,17 +410,35 @@ impl Renderer {
         t.prev_eye = Vec3::from(camera.eye);
         t.has_history = true;
         t.frame_index = t.frame_index.wrapping_add(1);
-        Ok(RenderedFrame { width: w, height: h, rgba, sampled, render_ms, readback_ms, passes_ms })
+        Ok(RenderedFrame {
+            width: w,
+            height: h,
+            rgba,
+            sampled,
+            render_ms,
+            readback_ms,
+            passes_ms,
+        })
     }
 
     /// Reads back the intermediate images of a stream's last frame.
-    pub fn inspect(&self, stream: u64, scene: &str, width: u32, height: u32) -> Result<Inspection, RenderError> {
+    pub fn inspect(
+        &self,
+        stream: u64,
+        scene: &str,
+        width: u32,
+        height: u32,
+    ) -> Result<Inspection, RenderError> {
         let key = (stream, scene.to_string(), width, height);
         let (_, t) = self
             .targets
             .iter()
             .find(|(k, _)| *k == key)
-            .ok_or_else(|| RenderError::Readback(format!("no frame rendered for stream {stream} at {width}x{height}")))?;
+            .ok_or_else(|| {
+                RenderError::Readback(format!(
+                    "no frame rendered for stream {stream} at {width}x{height}"
+                ))
+            })?;
         let buf = |b: &wgpu::Buffer| read_buffer(&self.gpu, b);
         let f32s = |b: Vec<u8>| -> Vec<f32> { bytemuck::pod_collect_to_vec(&b) };
         let u32s = |b: Vec<u8>| -> Vec<u32> { bytemuck::pod_collect_to_vec(&b) };
@@ -376,8 +472,20 @@ impl Renderer {
         }
         let sg = &self.scenes[scene];
         let plan = Plan::of(&sg.scene, w, h);
-        let materials = super::materials::upload(&self.gpu.device, "materials.planned", &super::materials::gpu_materials(&sg.scene, Some(&plan)));
-        let mut t = FrameTargets::new(&self.gpu.device, &self.passes, &self.rank_map, sg, materials, w, h);
+        let materials = super::materials::upload(
+            &self.gpu.device,
+            "materials.planned",
+            &super::materials::gpu_materials(&sg.scene, Some(&plan)),
+        );
+        let mut t = FrameTargets::new(
+            &self.gpu.device,
+            &self.passes,
+            &self.rank_map,
+            sg,
+            materials,
+            w,
+            h,
+        );
         t.needs_dipole = plan.photon_pass;
         self.targets.push((key, t));
         self.targets.len() - 1
@@ -389,15 +497,28 @@ fn tile_offset(frame: u32) -> [u32; 2] {
     const G: f64 = 1.324_717_957_244_746;
     let n = f64::from(frame);
     let side = f64::from(rank_map::TILE);
-    [((n / G).fract() * side) as u32, ((n / (G * G)).fract() * side) as u32]
+    [
+        ((n / G).fract() * side) as u32,
+        ((n / (G * G)).fract() * side) as u32,
+    ]
 }
 
-fn frame_uniform(scene: &Scene, camera: &Camera, req: &FrameRequest, t: &FrameTargets, to_light: Vec3, pyramid_ready: bool) -> FrameUniform {
+fn frame_uniform(
+    scene: &Scene,
+    camera: &Camera,
+    req: &FrameRequest,
+    t: &FrameTargets,
+    to_light: Vec3,
+    pyramid_ready: bool,
+) -> FrameUniform {
     let (w, h) = (req.width, req.height);
     let view_proj = camera.view_proj(w, h);
     let eye = Vec3::from(camera.eye);
-    let (prev_view_proj, prev_eye, history) =
-        if t.has_history { (t.prev_view_proj, t.prev_eye, 1.0) } else { (view_proj, eye, 0.0) };
+    let (prev_view_proj, prev_eye, history) = if t.has_history {
+        (t.prev_view_proj, t.prev_eye, 1.0)
+    } else {
+        (view_proj, eye, 0.0)
+    };
     let s = &req.settings;
     let fov = &s.foveation;
     let mut mode = 0;
@@ -414,10 +535,22 @@ fn frame_uniform(scene: &Scene, camera: &Camera, req: &FrameRequest, t: &FrameTa
             mode |= bit;
         }
     }
-    let viewing = Viewing { width: w, height: h, width_cm: req.display.width_cm, distance_cm: req.display.distance_cm };
-    let gaze_px = [f64::from(req.gaze[0]) * f64::from(w), f64::from(req.gaze[1]) * f64::from(h)];
+    let viewing = Viewing {
+        width: w,
+        height: h,
+        width_cm: req.display.width_cm,
+        distance_cm: req.display.distance_cm,
+    };
+    let gaze_px = [
+        f64::from(req.gaze[0]) * f64::from(w),
+        f64::from(req.gaze[1]) * f64::from(h),
+    ];
     let w_min = viewing.pixel_angle_deg();
-    let w_far = mar_deg(viewing.max_eccentricity_deg(gaze_px), f64::from(fov.mar_slope), f64::from(fov.mar_w0_deg));
+    let w_far = mar_deg(
+        viewing.max_eccentricity_deg(gaze_px),
+        f64::from(fov.mar_slope),
+        f64::from(fov.mar_w0_deg),
+    );
     let lighting = &scene.file.light;
     let light = Vec3::from(lighting.color) * lighting.intensity;
     let photon_radius_mm = super::pass::photons::photon_radius_mm(scene);
@@ -437,17 +570,33 @@ fn frame_uniform(scene: &Scene, camera: &Camera, req: &FrameRequest, t: &FrameTa
         to_light: to_light.extend(0.0).to_array(),
         light: light.extend(0.0).to_array(),
         albedo_ambient: [0.0, 0.0, 0.0, scene.file.ambient],
-        background: Vec3::from(scene.file.background_srgb.map(srgb8_to_linear)).extend(1.0).to_array(),
+        background: Vec3::from(scene.file.background_srgb.map(srgb8_to_linear))
+            .extend(1.0)
+            .to_array(),
         size: [w, h, t.frame_index, mode],
-        gaze: [gaze_px[0] as f32, gaze_px[1] as f32, req.pupil_mm, target_distance],
-        viewing: [(viewing.width_cm / f64::from(w)) as f32, viewing.distance_cm as f32, w_min as f32, w_far as f32],
+        gaze: [
+            gaze_px[0] as f32,
+            gaze_px[1] as f32,
+            req.pupil_mm,
+            target_distance,
+        ],
+        viewing: [
+            (viewing.width_cm / f64::from(w)) as f32,
+            viewing.distance_cm as f32,
+            w_min as f32,
+            w_far as f32,
+        ],
         acuity: [
             fov.mar_slope,
             fov.mar_w0_deg,
             // The forced minimum: ξ never drops below one sample per blue-noise tile, so every
             // 64×64 block of the object keeps at least one shaded sample to reconstruct from.
             fov.min_probability.clamp(MIN_XI, 1.0),
-            if fov.probability == ProbabilityForm::Density { 1.0 } else { 0.0 },
+            if fov.probability == ProbabilityForm::Density {
+                1.0
+            } else {
+                0.0
+            },
         ],
         temporal: [
             fov.max_history_age as f32,
@@ -469,7 +618,9 @@ fn frame_uniform(scene: &Scene, camera: &Camera, req: &FrameRequest, t: &FrameTa
             scene.file.mm_per_unit as f32,
         ],
         cut: [
-            s.translucency.cut_level.min(super::pass::photons::START_LEVEL) as f32,
+            s.translucency
+                .cut_level
+                .min(super::pass::photons::START_LEVEL) as f32,
             s.translucency.cut_epsilon.max(0.0),
             match s.translucency.rung {
                 Rung::Opaque => 0.0,
@@ -496,7 +647,11 @@ fn read_buffer(gpu: &Gpu, source: &wgpu::Buffer) -> Result<Vec<u8>, RenderError>
     map_read(&gpu.device, submission, &buffer, |bytes| bytes.to_vec())
 }
 
-fn read_texture(gpu: &Gpu, texture: &wgpu::Texture, bytes_per_pixel: u32) -> Result<Vec<u8>, RenderError> {
+fn read_texture(
+    gpu: &Gpu,
+    texture: &wgpu::Texture,
+    bytes_per_pixel: u32,
+) -> Result<Vec<u8>, RenderError> {
     let (w, h) = (texture.width(), texture.height());
     let align = wgpu::COPY_BYTES_PER_ROW_ALIGNMENT;
     let row = w * bytes_per_pixel;
@@ -512,13 +667,23 @@ fn read_texture(gpu: &Gpu, texture: &wgpu::Texture, bytes_per_pixel: u32) -> Res
         texture.as_image_copy(),
         wgpu::TexelCopyBufferInfo {
             buffer: &buffer,
-            layout: wgpu::TexelCopyBufferLayout { offset: 0, bytes_per_row: Some(padded), rows_per_image: Some(h) },
+            layout: wgpu::TexelCopyBufferLayout {
+                offset: 0,
+                bytes_per_row: Some(padded),
+                rows_per_image: Some(h),
+            },
         },
-        wgpu::Extent3d { width: w, height: h, depth_or_array_layers: 1 },
+        wgpu::Extent3d {
+            width: w,
+            height: h,
+            depth_or_array_layers: 1,
+        },
     );
     let submission = gpu.queue.submit([encoder.finish()]);
     map_read(&gpu.device, submission, &buffer, |bytes| {
-        bytes.chunks_exact(padded as usize).flat_map(|c| c[..row as usize].to_vec()).collect()
+        bytes
+            .chunks_exact(padded as usize)
+            .flat_map(|c| c[..row as usize].to_vec())
+            .collect()
     })
 }
-

@@ -91,10 +91,27 @@ impl FrameTargets {
         let normal_distance = tex("gbuffer.normal_distance", gbuffer::NORMAL_DISTANCE, attach);
         let albedo = tex("gbuffer.albedo", gbuffer::ALBEDO, attach);
         let blurred_normal = tex("gbuffer.blurred_normal", gbuffer::BLURRED_NORMAL, attach);
-        let history_normal_distance = tex("history.normal_distance", gbuffer::NORMAL_DISTANCE, U::TEXTURE_BINDING | U::COPY_DST);
+        let history_normal_distance = tex(
+            "history.normal_distance",
+            gbuffer::NORMAL_DISTANCE,
+            U::TEXTURE_BINDING | U::COPY_DST,
+        );
 
-        let buffer = |label, size: u64, usage| device.create_buffer(&wgpu::BufferDescriptor { label: Some(label), size, usage, mapped_at_creation: false });
-        let per_pixel = |label, bytes: u64| buffer(label, pixels * bytes, B::STORAGE | B::COPY_SRC | B::COPY_DST);
+        let buffer = |label, size: u64, usage| {
+            device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some(label),
+                size,
+                usage,
+                mapped_at_creation: false,
+            })
+        };
+        let per_pixel = |label, bytes: u64| {
+            buffer(
+                label,
+                pixels * bytes,
+                B::STORAGE | B::COPY_SRC | B::COPY_DST,
+            )
+        };
         let probability = per_pixel("sampling.probability", 4);
         let flags = per_pixel("sampling.flags", 4);
         let color = per_pixel("shade.color", 16);
@@ -105,29 +122,75 @@ impl FrameTargets {
         let resolved = per_pixel("resolve.color", 16);
         let dof = per_pixel("dof.color", 16);
         let final_image = per_pixel("output.final", 4);
-        let diffused = [per_pixel("screen_diffusion.a", 16), per_pixel("screen_diffusion.b", 16)];
+        let diffused = [
+            per_pixel("screen_diffusion.a", 16),
+            per_pixel("screen_diffusion.b", 16),
+        ];
         let list = per_pixel("compact.list", 4);
-        let counter = buffer("compact.counter", 16, B::STORAGE | B::INDIRECT | B::COPY_SRC | B::COPY_DST);
-        let uniform = buffer("frame.uniform", std::mem::size_of::<FrameUniform>() as u64, B::UNIFORM | B::COPY_DST);
+        let counter = buffer(
+            "compact.counter",
+            16,
+            B::STORAGE | B::INDIRECT | B::COPY_SRC | B::COPY_DST,
+        );
+        let uniform = buffer(
+            "frame.uniform",
+            std::mem::size_of::<FrameUniform>() as u64,
+            B::UNIFORM | B::COPY_DST,
+        );
         let steps = jfa_steps(width, height);
         // Room for the longest step list; each frame writes the steps it runs.
-        let jump = buffer("jfa.steps", jfa::SLOT * steps.len() as u64, B::UNIFORM | B::COPY_DST);
+        let jump = buffer(
+            "jfa.steps",
+            jfa::SLOT * steps.len() as u64,
+            B::UNIFORM | B::COPY_DST,
+        );
         let readback = buffer("output.readback", pixels * 4, B::COPY_DST | B::MAP_READ);
         let counter_readback = buffer("compact.counter.readback", 16, B::COPY_DST | B::MAP_READ);
 
         let u = uniform.as_entire_binding();
-        let (nd, alb, blur, hnd) = (view(&normal_distance), view(&albedo), view(&blurred_normal), view(&history_normal_distance));
+        let (nd, alb, blur, hnd) = (
+            view(&normal_distance),
+            view(&albedo),
+            view(&blurred_normal),
+            view(&history_normal_distance),
+        );
         use wgpu::BindingResource::TextureView as T;
         fn b(buf: &wgpu::Buffer) -> wgpu::BindingResource<'_> {
             buf.as_entire_binding()
         }
-        let gbuffer_bg = gpu::bind(device, "gbuffer", &passes.gbuffer.layout, &[u.clone(), b(&scene.materials)]);
+        let gbuffer_bg = gpu::bind(
+            device,
+            "gbuffer",
+            &passes.gbuffer.layout,
+            &[u.clone(), b(&scene.materials)],
+        );
         let sampling = passes.sampling.bind(
             device,
-            &[u.clone(), T(&nd), T(&alb), b(&materials), T(rank_map), b(&history_color), T(&hnd), b(&probability), b(&flags), b(&color), b(&seeds)],
+            &[
+                u.clone(),
+                T(&nd),
+                T(&alb),
+                b(&materials),
+                T(rank_map),
+                b(&history_color),
+                T(&hnd),
+                b(&probability),
+                b(&flags),
+                b(&color),
+                b(&seeds),
+            ],
         );
-        let compact = gpu::bind(device, "compact", &passes.compact.layout, &[u.clone(), b(&flags), b(&list), b(&counter)]);
-        let nodes = scene.photons.as_ref().map(|p| &p.nodes).unwrap_or(&scene.no_photons);
+        let compact = gpu::bind(
+            device,
+            "compact",
+            &passes.compact.layout,
+            &[u.clone(), b(&flags), b(&list), b(&counter)],
+        );
+        let nodes = scene
+            .photons
+            .as_ref()
+            .map(|p| &p.nodes)
+            .unwrap_or(&scene.no_photons);
         let shade = gpu::bind(
             device,
             "shade",
@@ -147,10 +210,31 @@ impl FrameTargets {
             ],
         );
         let diffusion = |src: &wgpu::Buffer, dst: &wgpu::Buffer| {
-            gpu::bind(device, "screen_diffusion", &passes.screen_diffusion.layout, &[u.clone(), T(&nd), T(&alb), b(&materials), b(&scene.reach), b(src), b(dst)])
+            gpu::bind(
+                device,
+                "screen_diffusion",
+                &passes.screen_diffusion.layout,
+                &[
+                    u.clone(),
+                    T(&nd),
+                    T(&alb),
+                    b(&materials),
+                    b(&scene.reach),
+                    b(src),
+                    b(dst),
+                ],
+            )
         };
-        let screen_diffusion = [diffusion(&diffused[1], &diffused[0]), diffusion(&diffused[0], &diffused[1]), diffusion(&diffused[1], &diffused[0])];
-        let jump_binding = wgpu::BindingResource::Buffer(wgpu::BufferBinding { buffer: &jump, offset: 0, size: wgpu::BufferSize::new(16) });
+        let screen_diffusion = [
+            diffusion(&diffused[1], &diffused[0]),
+            diffusion(&diffused[0], &diffused[1]),
+            diffusion(&diffused[1], &diffused[0]),
+        ];
+        let jump_binding = wgpu::BindingResource::Buffer(wgpu::BufferBinding {
+            buffer: &jump,
+            offset: 0,
+            size: wgpu::BufferSize::new(16),
+        });
         // Step 0 reads the seeds; then a → b, b → a, …
         let jfa_groups: Vec<wgpu::BindGroup> = (0..steps.len())
             .map(|i| {
@@ -159,14 +243,45 @@ impl FrameTargets {
                     (_, 1) => (&jfa_a, &jfa_b),
                     _ => (&jfa_b, &jfa_a),
                 };
-                gpu::bind(device, "jfa", &passes.jfa.layout, &[u.clone(), b(src), b(dst), jump_binding.clone()])
+                gpu::bind(
+                    device,
+                    "jfa",
+                    &passes.jfa.layout,
+                    &[u.clone(), b(src), b(dst), jump_binding.clone()],
+                )
             })
             .collect();
         let nearest = if steps.len() % 2 == 1 { &jfa_a } else { &jfa_b };
-        let resolve = passes.resolve.bind(device, &[u.clone(), b(&color), b(nearest), T(&alb), b(&resolved), T(&nd), b(&flags)]);
-        let dof_from_color = passes.dof.bind(device, &[u.clone(), b(&color), T(&nd), b(&dof)]);
-        let dof_from_resolved = passes.dof.bind(device, &[u.clone(), b(&resolved), T(&nd), b(&dof)]);
-        let output = |src: &wgpu::Buffer| passes.output.bind(device, &[u.clone(), b(src), b(&flags), b(&probability), b(&final_image)]);
+        let resolve = passes.resolve.bind(
+            device,
+            &[
+                u.clone(),
+                b(&color),
+                b(nearest),
+                T(&alb),
+                b(&resolved),
+                T(&nd),
+                b(&flags),
+            ],
+        );
+        let dof_from_color = passes
+            .dof
+            .bind(device, &[u.clone(), b(&color), T(&nd), b(&dof)]);
+        let dof_from_resolved = passes
+            .dof
+            .bind(device, &[u.clone(), b(&resolved), T(&nd), b(&dof)]);
+        let output = |src: &wgpu::Buffer| {
+            passes.output.bind(
+                device,
+                &[
+                    u.clone(),
+                    b(src),
+                    b(&flags),
+                    b(&probability),
+                    b(&final_image),
+                ],
+            )
+        };
         let bind = Bindings {
             gbuffer: gbuffer_bg,
             sampling,
@@ -236,24 +351,52 @@ impl FrameTargets {
     }
 
     pub fn gbuffer_views(&self) -> (wgpu::TextureView, wgpu::TextureView, wgpu::TextureView) {
-        (view(&self.normal_distance), view(&self.albedo), view(&self.blurred_normal))
+        (
+            view(&self.normal_distance),
+            view(&self.albedo),
+            view(&self.blurred_normal),
+        )
     }
 
     /// Encodes the copies that make this frame next frame's history.
     pub fn keep_history(&self, encoder: &mut wgpu::CommandEncoder) {
-        let whole = wgpu::Extent3d { width: self.width, height: self.height, depth_or_array_layers: 1 };
+        let whole = wgpu::Extent3d {
+            width: self.width,
+            height: self.height,
+            depth_or_array_layers: 1,
+        };
         encoder.copy_buffer_to_buffer(&self.color, 0, &self.history_color, 0, self.color.size());
-        encoder.copy_texture_to_texture(self.normal_distance.as_image_copy(), self.history_normal_distance.as_image_copy(), whole);
+        encoder.copy_texture_to_texture(
+            self.normal_distance.as_image_copy(),
+            self.history_normal_distance.as_image_copy(),
+            whole,
+        );
     }
 
     /// Copies the final image and the sample count to host memory.
-    pub fn read_back(&self, device: &wgpu::Device, queue: &wgpu::Queue) -> Result<(Vec<u8>, u32), RenderError> {
-        let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("readback") });
-        encoder.copy_buffer_to_buffer(&self.final_image, 0, &self.readback, 0, self.final_image.size());
+    pub fn read_back(
+        &self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+    ) -> Result<(Vec<u8>, u32), RenderError> {
+        let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
+            label: Some("readback"),
+        });
+        encoder.copy_buffer_to_buffer(
+            &self.final_image,
+            0,
+            &self.readback,
+            0,
+            self.final_image.size(),
+        );
         encoder.copy_buffer_to_buffer(&self.counter, 0, &self.counter_readback, 0, 16);
         let submission = queue.submit([encoder.finish()]);
-        let image = map_read(device, submission.clone(), &self.readback, |bytes| bytes.to_vec())?;
-        let count = map_read(device, submission, &self.counter_readback, |b| u32::from_le_bytes([b[0], b[1], b[2], b[3]]))?;
+        let image = map_read(device, submission.clone(), &self.readback, |bytes| {
+            bytes.to_vec()
+        })?;
+        let count = map_read(device, submission, &self.counter_readback, |b| {
+            u32::from_le_bytes([b[0], b[1], b[2], b[3]])
+        })?;
         Ok((image, count))
     }
 }
@@ -270,7 +413,10 @@ pub fn map_read<T>(
         let _ = tx.send(r);
     });
     device
-        .poll(wgpu::PollType::Wait { submission_index: Some(submission), timeout: None })
+        .poll(wgpu::PollType::Wait {
+            submission_index: Some(submission),
+            timeout: None,
+        })
         .map_err(|e| RenderError::Readback(format!("waiting for the copy: {e}")))?;
     match rx.recv() {
         Ok(Ok(())) => {}
@@ -278,7 +424,9 @@ pub fn map_read<T>(
         Err(_) => return Err(RenderError::Readback("map callback never ran".into())),
     }
     let out = {
-        let view = buffer.get_mapped_range(..).map_err(|e| RenderError::Readback(format!("mapped range: {e}")))?;
+        let view = buffer
+            .get_mapped_range(..)
+            .map_err(|e| RenderError::Readback(format!("mapped range: {e}")))?;
         read(&view)
     };
     buffer.unmap();

@@ -14,7 +14,11 @@ use super::{FrameRequest, RenderError, RenderedFrame, Renderer};
 const QUEUE_DEPTH: usize = 16;
 
 enum Job {
-    Render { request: FrameRequest, enqueued: Instant, reply: oneshot::Sender<Result<Rendered, RenderError>> },
+    Render {
+        request: FrameRequest,
+        enqueued: Instant,
+        reply: oneshot::Sender<Result<Rendered, RenderError>>,
+    },
     /// A stream (session) ended: free its targets and history.
     Release(u64),
 }
@@ -36,8 +40,15 @@ pub struct RenderHandle {
 impl RenderHandle {
     pub async fn render(&self, request: FrameRequest) -> Result<Rendered, RenderError> {
         let (reply, rx) = oneshot::channel();
-        let job = Job::Render { request, enqueued: Instant::now(), reply };
-        self.tx.send(job).await.map_err(|_| RenderError::ThreadGone)?;
+        let job = Job::Render {
+            request,
+            enqueued: Instant::now(),
+            reply,
+        };
+        self.tx
+            .send(job)
+            .await
+            .map_err(|_| RenderError::ThreadGone)?;
         rx.await.map_err(|_| RenderError::ThreadGone)?
     }
 
@@ -70,7 +81,11 @@ impl RenderThread {
 fn run(mut renderer: Renderer, mut rx: mpsc::Receiver<Job>) {
     while let Some(job) = rx.blocking_recv() {
         let (request, enqueued, reply) = match job {
-            Job::Render { request, enqueued, reply } => (request, enqueued, reply),
+            Job::Render {
+                request,
+                enqueued,
+                reply,
+            } => (request, enqueued, reply),
             Job::Release(stream) => {
                 renderer.release_stream(stream);
                 continue;

@@ -41,7 +41,13 @@ impl PassTimer {
             usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
             mapped_at_creation: false,
         });
-        PassTimer { query_set, resolve, read, labels: Vec::new(), period_ns: f64::from(queue.get_timestamp_period()) }
+        PassTimer {
+            query_set,
+            resolve,
+            read,
+            labels: Vec::new(),
+            period_ns: f64::from(queue.get_timestamp_period()),
+        }
     }
 
     /// Whether passes are timed on the GPU (else only whole-frame wall time is known).
@@ -63,19 +69,21 @@ impl PassTimer {
     }
 
     pub fn compute(&mut self, label: &'static str) -> Option<wgpu::ComputePassTimestampWrites<'_>> {
-        self.slot(label).map(|(query_set, i)| wgpu::ComputePassTimestampWrites {
-            query_set,
-            beginning_of_pass_write_index: Some(i),
-            end_of_pass_write_index: Some(i + 1),
-        })
+        self.slot(label)
+            .map(|(query_set, i)| wgpu::ComputePassTimestampWrites {
+                query_set,
+                beginning_of_pass_write_index: Some(i),
+                end_of_pass_write_index: Some(i + 1),
+            })
     }
 
     pub fn render(&mut self, label: &'static str) -> Option<wgpu::RenderPassTimestampWrites<'_>> {
-        self.slot(label).map(|(query_set, i)| wgpu::RenderPassTimestampWrites {
-            query_set,
-            beginning_of_pass_write_index: Some(i),
-            end_of_pass_write_index: Some(i + 1),
-        })
+        self.slot(label)
+            .map(|(query_set, i)| wgpu::RenderPassTimestampWrites {
+                query_set,
+                beginning_of_pass_write_index: Some(i),
+                end_of_pass_write_index: Some(i + 1),
+            })
     }
 
     /// Encodes the copy of this frame's timestamps to the readable buffer.
@@ -83,19 +91,31 @@ impl PassTimer {
         if let (Some(q), n) = (&self.query_set, self.labels.len() as u32) {
             if n > 0 {
                 encoder.resolve_query_set(q, 0..2 * n, &self.resolve, 0);
-                encoder.copy_buffer_to_buffer(&self.resolve, 0, &self.read, 0, u64::from(2 * n) * 8);
+                encoder.copy_buffer_to_buffer(
+                    &self.resolve,
+                    0,
+                    &self.read,
+                    0,
+                    u64::from(2 * n) * 8,
+                );
             }
         }
     }
 
     /// Milliseconds per pass label (summed where a label repeats), after `submission` is done.
-    pub fn read(&self, device: &wgpu::Device, submission: wgpu::SubmissionIndex) -> Result<BTreeMap<String, f64>, RenderError> {
+    pub fn read(
+        &self,
+        device: &wgpu::Device,
+        submission: wgpu::SubmissionIndex,
+    ) -> Result<BTreeMap<String, f64>, RenderError> {
         let mut out = BTreeMap::new();
         if self.query_set.is_none() || self.labels.is_empty() {
             return Ok(out);
         }
         let ticks: Vec<u64> = map_read(device, submission, &self.read, |b| {
-            b.chunks_exact(8).map(|c| u64::from_le_bytes(c.try_into().unwrap_or([0; 8]))).collect()
+            b.chunks_exact(8)
+                .map(|c| u64::from_le_bytes(c.try_into().unwrap_or([0; 8])))
+                .collect()
         })?;
         for (i, label) in self.labels.iter().enumerate() {
             let (start, end) = (ticks[2 * i], ticks[2 * i + 1]);

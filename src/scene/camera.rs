@@ -43,7 +43,10 @@ impl Camera {
             return Err(format!("fov_y_deg {} is outside (1, 179)", self.fov_y_deg));
         }
         if !(self.near > 0.0 && self.far > self.near && self.far.is_finite()) {
-            return Err(format!("need 0 < near < far, got near {} far {}", self.near, self.far));
+            return Err(format!(
+                "need 0 < near < far, got near {} far {}",
+                self.near, self.far
+            ));
         }
         Ok(())
     }

@@ -55,8 +55,15 @@ pub enum MaterialSpec {
 /// A validated material, ready for shading.
 #[derive(Debug, Clone, PartialEq)]
 pub enum Material {
-    Opaque { albedo: [f64; 3] },
-    Translucent { sigma_s_prime: [f64; 3], sigma_a: [f64; 3], eta: f64, dipole: [Dipole; 3] },
+    Opaque {
+        albedo: [f64; 3],
+    },
+    Translucent {
+        sigma_s_prime: [f64; 3],
+        sigma_a: [f64; 3],
+        eta: f64,
+        dipole: [Dipole; 3],
+    },
 }
 
 impl Material {
@@ -68,25 +75,49 @@ impl Material {
                 }
                 Ok(Material::Opaque { albedo: *albedo })
             }
-            MaterialSpec::Translucent { preset, sigma_s_prime, sigma_a, eta } => {
+            MaterialSpec::Translucent {
+                preset,
+                sigma_s_prime,
+                sigma_a,
+                eta,
+            } => {
                 let base = match preset {
                     Some(name) => {
-                        let (_, s, a) = JENSEN_2001.iter().find(|(n, _, _)| n == name).ok_or_else(|| {
-                            let names: Vec<&str> = JENSEN_2001.iter().map(|(n, _, _)| *n).collect();
-                            format!("unknown medium {name:?}; measured presets: {}", names.join(", "))
-                        })?;
+                        let (_, s, a) =
+                            JENSEN_2001
+                                .iter()
+                                .find(|(n, _, _)| n == name)
+                                .ok_or_else(|| {
+                                    let names: Vec<&str> =
+                                        JENSEN_2001.iter().map(|(n, _, _)| *n).collect();
+                                    format!(
+                                        "unknown medium {name:?}; measured presets: {}",
+                                        names.join(", ")
+                                    )
+                                })?;
                         Some((*s, *a))
                     }
                     None => None,
                 };
-                let s = sigma_s_prime.or(base.map(|b| b.0)).ok_or("a translucent material needs a preset or sigma_s_prime")?;
-                let a = sigma_a.or(base.map(|b| b.1)).ok_or("a translucent material needs a preset or sigma_a")?;
+                let s = sigma_s_prime
+                    .or(base.map(|b| b.0))
+                    .ok_or("a translucent material needs a preset or sigma_s_prime")?;
+                let a = sigma_a
+                    .or(base.map(|b| b.1))
+                    .ok_or("a translucent material needs a preset or sigma_a")?;
                 let eta = eta.unwrap_or(JENSEN_ETA);
                 let mut dipole = Vec::with_capacity(3);
                 for c in 0..3 {
-                    dipole.push(Dipole::new(s[c], a[c], eta).map_err(|e: DipoleError| format!("channel {}: {e}", ["R", "G", "B"][c]))?);
+                    dipole.push(Dipole::new(s[c], a[c], eta).map_err(|e: DipoleError| {
+                        format!("channel {}: {e}", ["R", "G", "B"][c])
+                    })?);
                 }
-                Ok(Material::Translucent { sigma_s_prime: s, sigma_a: a, eta, dipole: [dipole[0], dipole[1], dipole[2]] })
+                Ok(Material::Translucent {
+                    sigma_s_prime: s,
+                    sigma_a: a,
+                    eta,
+                    dipole: [dipole[0], dipole[1], dipole[2]],
+                })
             }
         }
     }
@@ -109,7 +140,10 @@ impl Material {
     pub fn reach_mm(&self) -> f64 {
         match self {
             Material::Opaque { .. } => 0.0,
-            Material::Translucent { dipole, .. } => dipole.iter().map(|d| d.reach(REACH_FRACTION)).fold(0.0, f64::max),
+            Material::Translucent { dipole, .. } => dipole
+                .iter()
+                .map(|d| d.reach(REACH_FRACTION))
+                .fold(0.0, f64::max),
         }
     }
 }
@@ -121,7 +155,12 @@ mod tests {
     #[test]
     fn every_measured_medium_is_a_valid_dipole_with_a_plausible_colour() {
         for (name, _, _) in JENSEN_2001 {
-            let spec = MaterialSpec::Translucent { preset: Some(name.to_string()), sigma_s_prime: None, sigma_a: None, eta: None };
+            let spec = MaterialSpec::Translucent {
+                preset: Some(name.to_string()),
+                sigma_s_prime: None,
+                sigma_a: None,
+                eta: None,
+            };
             let m = Material::from_spec(&spec).unwrap();
             for rd in m.albedo() {
                 assert!((0.0..1.0).contains(&rd), "{name}: {rd}");
@@ -133,23 +172,50 @@ mod tests {
     #[test]
     fn marble_is_white_ketchup_is_red_and_cream_spreads_less_than_marble() {
         let get = |n: &str| {
-            Material::from_spec(&MaterialSpec::Translucent { preset: Some(n.into()), sigma_s_prime: None, sigma_a: None, eta: None }).unwrap()
+            Material::from_spec(&MaterialSpec::Translucent {
+                preset: Some(n.into()),
+                sigma_s_prime: None,
+                sigma_a: None,
+                eta: None,
+            })
+            .unwrap()
         };
         let marble = get("marble").albedo();
         assert!(marble.iter().all(|c| *c > 0.8), "{marble:?}");
         let ketchup = get("ketchup").albedo();
-        assert!(ketchup[0] > 3.0 * ketchup[1] && ketchup[0] > 3.0 * ketchup[2], "{ketchup:?}");
-        assert!(get("marble").reach_mm() > 1.0 && get("cream").reach_mm() < get("marble").reach_mm());
+        assert!(
+            ketchup[0] > 3.0 * ketchup[1] && ketchup[0] > 3.0 * ketchup[2],
+            "{ketchup:?}"
+        );
+        assert!(
+            get("marble").reach_mm() > 1.0 && get("cream").reach_mm() < get("marble").reach_mm()
+        );
     }
 
     #[test]
     fn bad_media_are_rejected_at_load_with_the_reason() {
         let t = |s: [f64; 3], a: [f64; 3]| {
-            Material::from_spec(&MaterialSpec::Translucent { preset: None, sigma_s_prime: Some(s), sigma_a: Some(a), eta: None })
+            Material::from_spec(&MaterialSpec::Translucent {
+                preset: None,
+                sigma_s_prime: Some(s),
+                sigma_a: Some(a),
+                eta: None,
+            })
         };
-        assert!(t([0.0; 3], [0.0; 3]).unwrap_err().contains("neither scatters nor absorbs"));
-        assert!(t([1.0, 1.0, 0.0], [0.01, 0.01, 0.5]).unwrap_err().contains("channel B"));
-        let unknown = MaterialSpec::Translucent { preset: Some("jade".into()), sigma_s_prime: None, sigma_a: None, eta: None };
-        assert!(Material::from_spec(&unknown).unwrap_err().contains("marble"));
+        assert!(t([0.0; 3], [0.0; 3])
+            .unwrap_err()
+            .contains("neither scatters nor absorbs"));
+        assert!(t([1.0, 1.0, 0.0], [0.01, 0.01, 0.5])
+            .unwrap_err()
+            .contains("channel B"));
+        let unknown = MaterialSpec::Translucent {
+            preset: Some("jade".into()),
+            sigma_s_prime: None,
+            sigma_a: None,
+            eta: None,
+        };
+        assert!(Material::from_spec(&unknown)
+            .unwrap_err()
+            .contains("marble"));
     }
 }

@@ -27,9 +27,18 @@ impl Mesh {
         }
         // A vertex used by no triangle (or only by zero-area ones) gets a harmless up vector
         // instead of a NaN from normalising zero.
-        let normals: Vec<Vec3> = normals.into_iter().map(|n| n.try_normalize().unwrap_or(Vec3::Y)).collect();
+        let normals: Vec<Vec3> = normals
+            .into_iter()
+            .map(|n| n.try_normalize().unwrap_or(Vec3::Y))
+            .collect();
         let n = positions.len();
-        Mesh { positions, blurred_normals: normals.clone(), normals, material: vec![0; n], indices }
+        Mesh {
+            positions,
+            blurred_normals: normals.clone(),
+            normals,
+            material: vec![0; n],
+            indices,
+        }
     }
 
     /// Averages each vertex's normal with its neighbours within `radius` (weights fall as
@@ -52,7 +61,11 @@ impl Mesh {
                         weight += w;
                     }
                 }
-                if weight > 0.0 { sum / weight } else { Vec3::ZERO }
+                if weight > 0.0 {
+                    sum / weight
+                } else {
+                    Vec3::ZERO
+                }
             })
             .collect();
         self
@@ -62,7 +75,8 @@ impl Mesh {
     pub fn append(&mut self, other: Mesh, material: u32) {
         let base = self.positions.len() as u32;
         self.indices.extend(other.indices.iter().map(|i| i + base));
-        self.material.extend(std::iter::repeat_n(material, other.positions.len()));
+        self.material
+            .extend(std::iter::repeat_n(material, other.positions.len()));
         self.positions.extend(other.positions);
         self.normals.extend(other.normals);
         self.blurred_normals.extend(other.blurred_normals);
@@ -73,9 +87,10 @@ impl Mesh {
     }
 
     pub fn bounds(&self) -> (Vec3, Vec3) {
-        self.positions.iter().fold((Vec3::splat(f32::MAX), Vec3::splat(f32::MIN)), |(lo, hi), &p| {
-            (lo.min(p), hi.max(p))
-        })
+        self.positions.iter().fold(
+            (Vec3::splat(f32::MAX), Vec3::splat(f32::MIN)),
+            |(lo, hi), &p| (lo.min(p), hi.max(p)),
+        )
     }
 }
 
@@ -85,20 +100,39 @@ mod tests {
 
     #[test]
     fn flat_triangle_normals_point_out_of_its_ccw_face() {
-        let m = Mesh::with_smooth_normals(vec![Vec3::ZERO, Vec3::X, Vec3::Y, Vec3::Z * 5.0], vec![0, 1, 2]);
+        let m = Mesh::with_smooth_normals(
+            vec![Vec3::ZERO, Vec3::X, Vec3::Y, Vec3::Z * 5.0],
+            vec![0, 1, 2],
+        );
         assert_eq!(&m.normals[..3], &[Vec3::Z; 3]);
-        assert_eq!(m.normals[3], Vec3::Y, "unused vertex gets a finite fallback normal");
+        assert_eq!(
+            m.normals[3],
+            Vec3::Y,
+            "unused vertex gets a finite fallback normal"
+        );
     }
 
     #[test]
     fn blurring_shortens_normals_on_curved_surfaces_only() {
         // Two triangles folded 90° along x: blurred normals at the fold lean between the faces.
-        let p = vec![Vec3::ZERO, Vec3::X, Vec3::new(0.0, 0.0, -1.0), Vec3::new(0.0, -1.0, 0.0)];
+        let p = vec![
+            Vec3::ZERO,
+            Vec3::X,
+            Vec3::new(0.0, 0.0, -1.0),
+            Vec3::new(0.0, -1.0, 0.0),
+        ];
         let m = Mesh::with_smooth_normals(p, vec![0, 1, 2, 0, 3, 1]).with_blurred_normals(3.0);
         for n in &m.blurred_normals {
-            assert!(n.is_finite() && n.length() < 1.0 && n.length() > 0.5, "{n:?}");
+            assert!(
+                n.is_finite() && n.length() < 1.0 && n.length() > 0.5,
+                "{n:?}"
+            );
         }
-        let flat = Mesh::with_smooth_normals(vec![Vec3::ZERO, Vec3::X, Vec3::Y], vec![0, 1, 2]).with_blurred_normals(5.0);
-        assert!(flat.blurred_normals.iter().all(|n| (*n - Vec3::Z).length() < 1e-6));
+        let flat = Mesh::with_smooth_normals(vec![Vec3::ZERO, Vec3::X, Vec3::Y], vec![0, 1, 2])
+            .with_blurred_normals(5.0);
+        assert!(flat
+            .blurred_normals
+            .iter()
+            .all(|n| (*n - Vec3::Z).length() < 1e-6));
     }
 }

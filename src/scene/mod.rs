@@ -25,15 +25,25 @@ pub const DEFAULT_SCENE: &str = "bunny-marble";
 
 /// Built-in scenes: (name, scene JSON).
 const BUILTIN_SCENES: &[(&str, &str)] = &[
-    ("bunny-marble", include_str!("../../assets/scenes/bunny-marble.json")),
-    ("bunny-skin", include_str!("../../assets/scenes/bunny-skin.json")),
-    ("materials", include_str!("../../assets/scenes/materials.json")),
+    (
+        "bunny-marble",
+        include_str!("../../assets/scenes/bunny-marble.json"),
+    ),
+    (
+        "bunny-skin",
+        include_str!("../../assets/scenes/bunny-skin.json"),
+    ),
+    (
+        "materials",
+        include_str!("../../assets/scenes/materials.json"),
+    ),
     ("opaque", include_str!("../../assets/scenes/opaque.json")),
     ("bunny", include_str!("../../assets/scenes/bunny.json")),
 ];
 
 /// Meshes scene files may refer to by file name.
-const BUILTIN_MESHES: &[(&str, &[u8])] = &[("bunny.ply", include_bytes!("../../assets/meshes/bunny.ply"))];
+const BUILTIN_MESHES: &[(&str, &[u8])] =
+    &[("bunny.ply", include_bytes!("../../assets/meshes/bunny.ply"))];
 
 #[derive(Debug, thiserror::Error)]
 pub enum SceneError {
@@ -42,9 +52,16 @@ pub enum SceneError {
     #[error("scene {scene:?} refers to mesh {mesh:?}, which is not built in (available: bunny.ply, plane)")]
     UnknownMesh { scene: String, mesh: String },
     #[error("scene file {scene:?} is invalid: {source}")]
-    Json { scene: String, source: serde_json::Error },
+    Json {
+        scene: String,
+        source: serde_json::Error,
+    },
     #[error("scene {scene:?}: mesh {mesh:?}: {source}")]
-    Mesh { scene: String, mesh: String, source: PlyError },
+    Mesh {
+        scene: String,
+        mesh: String,
+        source: PlyError,
+    },
     #[error("scene {scene:?}: {message}")]
     Invalid { scene: String, message: String },
 }
@@ -130,13 +147,24 @@ pub struct Scene {
 }
 
 pub fn builtin_names() -> Vec<String> {
-    BUILTIN_SCENES.iter().map(|(n, _)| (*n).to_string()).collect()
+    BUILTIN_SCENES
+        .iter()
+        .map(|(n, _)| (*n).to_string())
+        .collect()
 }
 
 /// A unit square in XZ centred on the origin, facing +Y (two counter-clockwise triangles).
 fn plane() -> PlyMesh {
-    let positions = vec![Vec3::new(-0.5, 0.0, -0.5), Vec3::new(-0.5, 0.0, 0.5), Vec3::new(0.5, 0.0, 0.5), Vec3::new(0.5, 0.0, -0.5)];
-    PlyMesh { positions, indices: vec![0, 1, 2, 0, 2, 3] }
+    let positions = vec![
+        Vec3::new(-0.5, 0.0, -0.5),
+        Vec3::new(-0.5, 0.0, 0.5),
+        Vec3::new(0.5, 0.0, 0.5),
+        Vec3::new(0.5, 0.0, -0.5),
+    ];
+    PlyMesh {
+        positions,
+        indices: vec![0, 1, 2, 0, 2, 3],
+    }
 }
 
 impl Scene {
@@ -150,15 +178,27 @@ impl Scene {
 
     pub fn from_json(json: &str) -> Result<Scene, SceneError> {
         let mut file: SceneFile =
-            serde_json::from_str(json).map_err(|source| SceneError::Json { scene: "<json>".into(), source })?;
+            serde_json::from_str(json).map_err(|source| SceneError::Json {
+                scene: "<json>".into(),
+                source,
+            })?;
         let scene = file.name.clone();
-        let invalid = |message: String| SceneError::Invalid { scene: scene.clone(), message };
+        let invalid = |message: String| SceneError::Invalid {
+            scene: scene.clone(),
+            message,
+        };
         file.camera.validate().map_err(invalid)?;
         if !(0.0..=1.0).contains(&file.ambient) {
-            return Err(invalid(format!("ambient {} must lie in [0, 1]", file.ambient)));
+            return Err(invalid(format!(
+                "ambient {} must lie in [0, 1]",
+                file.ambient
+            )));
         }
         if !(file.mm_per_unit.is_finite() && file.mm_per_unit > 0.0) {
-            return Err(invalid(format!("mm_per_unit {} must be finite and > 0", file.mm_per_unit)));
+            return Err(invalid(format!(
+                "mm_per_unit {} must be finite and > 0",
+                file.mm_per_unit
+            )));
         }
         let to_light = Vec3::from(file.light.to_light)
             .try_normalize()
@@ -169,11 +209,14 @@ impl Scene {
             && file.light.intensity >= 0.0
             && file.light.orbit_deg_per_s.is_finite();
         if !light_ok {
-            return Err(invalid("light colour and intensity must be finite and ≥ 0".into()));
+            return Err(invalid(
+                "light colour and intensity must be finite and ≥ 0".into(),
+            ));
         }
         let mut materials = Vec::new();
         for (name, spec) in &file.materials {
-            let m = Material::from_spec(spec).map_err(|e| invalid(format!("material {name:?}: {e}")))?;
+            let m = Material::from_spec(spec)
+                .map_err(|e| invalid(format!("material {name:?}: {e}")))?;
             materials.push((name.clone(), m));
         }
         if file.objects.is_empty() {
@@ -184,32 +227,58 @@ impl Scene {
             let material = materials
                 .iter()
                 .position(|(n, _)| *n == object.material)
-                .ok_or_else(|| invalid(format!("object {i} uses material {:?}, which the scene does not define", object.material)))?;
+                .ok_or_else(|| {
+                    invalid(format!(
+                        "object {i} uses material {:?}, which the scene does not define",
+                        object.material
+                    ))
+                })?;
             let ply = match object.mesh.as_str() {
                 "plane" => plane(),
                 name => {
-                    let (_, bytes) = BUILTIN_MESHES
-                        .iter()
-                        .find(|(n, _)| *n == name)
-                        .ok_or_else(|| SceneError::UnknownMesh { scene: scene.clone(), mesh: name.to_string() })?;
-                    parse_ply(bytes).map_err(|source| SceneError::Mesh { scene: scene.clone(), mesh: name.to_string(), source })?
+                    let (_, bytes) =
+                        BUILTIN_MESHES
+                            .iter()
+                            .find(|(n, _)| *n == name)
+                            .ok_or_else(|| SceneError::UnknownMesh {
+                                scene: scene.clone(),
+                                mesh: name.to_string(),
+                            })?;
+                    parse_ply(bytes).map_err(|source| SceneError::Mesh {
+                        scene: scene.clone(),
+                        mesh: name.to_string(),
+                        source,
+                    })?
                 }
             };
-            if !(object.scale.is_finite() && object.scale > 0.0) || !Vec3::from(object.translate).is_finite() || !object.rotate_y_deg.is_finite() {
-                return Err(invalid(format!("object {i}: scale must be > 0 and the transform finite")));
+            if !(object.scale.is_finite() && object.scale > 0.0)
+                || !Vec3::from(object.translate).is_finite()
+                || !object.rotate_y_deg.is_finite()
+            {
+                return Err(invalid(format!(
+                    "object {i}: scale must be > 0 and the transform finite"
+                )));
             }
             let transform = Mat4::from_scale_rotation_translation(
                 Vec3::splat(object.scale),
                 Quat::from_rotation_y(object.rotate_y_deg.to_radians()),
                 Vec3::from(object.translate),
             );
-            let positions: Vec<Vec3> = ply.positions.iter().map(|p| transform.transform_point3(*p)).collect();
+            let positions: Vec<Vec3> = ply
+                .positions
+                .iter()
+                .map(|p| transform.transform_point3(*p))
+                .collect();
             let part = Mesh::with_smooth_normals(positions, ply.indices);
             // The cheap translucency rung shades with normals blurred over the light's reach.
             let reach_units = (materials[material].1.reach_mm() / file.mm_per_unit) as f32;
             mesh.append(part.with_blurred_normals(reach_units), material as u32);
         }
-        Ok(Scene { file, mesh, materials })
+        Ok(Scene {
+            file,
+            mesh,
+            materials,
+        })
     }
 
     pub fn name(&self) -> &str {
@@ -254,7 +323,11 @@ mod tests {
             ("\"ambient\": 0.02", "\"ambient\": 3.0", "ambient"),
             ("\"preset\": \"marble\"", "\"preset\": \"jade\"", "jade"),
             ("\"material\": \"marble\"", "\"material\": \"gold\"", "gold"),
-            ("\"mesh\": \"bunny.ply\"", "\"mesh\": \"teapot.obj\"", "teapot.obj"),
+            (
+                "\"mesh\": \"bunny.ply\"",
+                "\"mesh\": \"teapot.obj\"",
+                "teapot.obj",
+            ),
         ] {
             let bad = good.replace(from, to);
             assert_ne!(good, bad, "test must actually change the file ({from})");
@@ -265,7 +338,12 @@ mod tests {
 
     #[test]
     fn an_orbiting_light_turns_and_a_static_one_does_not() {
-        let mut l = Light { to_light: [1.0, 0.0, 0.0], color: [1.0; 3], intensity: 1.0, orbit_deg_per_s: 0.0 };
+        let mut l = Light {
+            to_light: [1.0, 0.0, 0.0],
+            color: [1.0; 3],
+            intensity: 1.0,
+            orbit_deg_per_s: 0.0,
+        };
         assert_eq!(l.to_light_at(10.0), Vec3::X);
         l.orbit_deg_per_s = 90.0;
         assert!((l.to_light_at(1.0) - Vec3::new(0.0, 0.0, -1.0)).length() < 1e-6);

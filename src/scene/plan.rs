@@ -49,7 +49,9 @@ impl Plan {
         let cam = &scene.file.camera;
         let eye = Vec3::from(cam.eye);
         // Millimetres one pixel spans per unit of distance from the eye.
-        let mm_per_pixel_per_unit = 2.0 * (f64::from(cam.fov_y_deg).to_radians() / 2.0).tan() / f64::from(height.max(1)) * scene.file.mm_per_unit;
+        let mm_per_pixel_per_unit = 2.0 * (f64::from(cam.fov_y_deg).to_radians() / 2.0).tan()
+            / f64::from(height.max(1))
+            * scene.file.mm_per_unit;
         let materials: Vec<MaterialPlan> = scene
             .materials
             .iter()
@@ -72,7 +74,8 @@ impl Plan {
                     translucent: m.is_translucent(),
                     reach_mm,
                     footprint_mm,
-                    subsurface: matches!(m, Material::Translucent { .. }) && reach_mm >= footprint_mm,
+                    subsurface: matches!(m, Material::Translucent { .. })
+                        && reach_mm >= footprint_mm,
                 }
             })
             .collect();
@@ -81,9 +84,19 @@ impl Plan {
         let pyramid = match (needs_dipole, orbit != 0.0) {
             (false, _) => Pyramid::NotNeeded,
             (true, false) => Pyramid::Once,
-            (true, true) => Pyramid::EveryFrame { orbit_deg_per_s: orbit },
+            (true, true) => Pyramid::EveryFrame {
+                orbit_deg_per_s: orbit,
+            },
         };
-        Plan { scene: scene.name().to_string(), width, height, materials, photon_pass: needs_dipole, pyramid, radiosity: false }
+        Plan {
+            scene: scene.name().to_string(),
+            width,
+            height,
+            materials,
+            photon_pass: needs_dipole,
+            pyramid,
+            radiosity: false,
+        }
     }
 
     /// Whether material `id` is shaded with the subsurface rungs.
@@ -94,7 +107,11 @@ impl Plan {
 
 impl fmt::Display for Plan {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        writeln!(f, "scene plan for {:?} at {}x{}:", self.scene, self.width, self.height)?;
+        writeln!(
+            f,
+            "scene plan for {:?} at {}x{}:",
+            self.scene, self.width, self.height
+        )?;
         for m in &self.materials {
             if !m.translucent {
                 writeln!(f, "  material {:?}: opaque BRDF", m.name)?;
@@ -119,7 +136,10 @@ impl fmt::Display for Plan {
                 writeln!(f, "  light-space photon pass + quad-tree pyramid: rebuilt every frame (light orbits {orbit_deg_per_s}°/s)")?
             }
         }
-        writeln!(f, "  radiosity: off (open scene: no enclosure for light to bounce around in)")
+        writeln!(
+            f,
+            "  radiosity: off (open scene: no enclosure for light to bounce around in)"
+        )
     }
 }
 
@@ -146,15 +166,25 @@ mod tests {
     fn mixed_scenes_plan_each_material() {
         let p = Plan::of(&Scene::builtin("materials").unwrap(), 640, 480);
         let get = |n: &str| p.materials.iter().find(|m| m.name == n).unwrap();
-        assert!(get("marble").subsurface && !get("plaster").subsurface && !get("plaster").translucent);
+        assert!(
+            get("marble").subsurface && !get("plaster").subsurface && !get("plaster").translucent
+        );
         assert!(p.photon_pass);
     }
 
     #[test]
     fn an_animated_light_rebuilds_every_frame() {
-        let json = include_str!("../../assets/scenes/bunny-marble.json").replace("\"intensity\": 2.5", "\"intensity\": 2.5, \"orbit_deg_per_s\": 30");
+        let json = include_str!("../../assets/scenes/bunny-marble.json").replace(
+            "\"intensity\": 2.5",
+            "\"intensity\": 2.5, \"orbit_deg_per_s\": 30",
+        );
         let p = Plan::of(&Scene::from_json(&json).unwrap(), 640, 480);
-        assert_eq!(p.pyramid, Pyramid::EveryFrame { orbit_deg_per_s: 30.0 });
+        assert_eq!(
+            p.pyramid,
+            Pyramid::EveryFrame {
+                orbit_deg_per_s: 30.0
+            }
+        );
         assert!(p.to_string().contains("rebuilt every frame"));
     }
 
@@ -165,9 +195,18 @@ mod tests {
         let p = Plan::of(&Scene::builtin("materials").unwrap(), 32, 24);
         let skin = p.materials.iter().find(|m| m.name == "skin").unwrap();
         assert!(skin.translucent && !skin.subsurface, "{p}");
-        assert!(p.to_string().contains("opaque BRDF at its total diffuse reflectance"));
+        assert!(p
+            .to_string()
+            .contains("opaque BRDF at its total diffuse reflectance"));
         // At full HD the same material needs its subsurface light.
         let hd = Plan::of(&Scene::builtin("materials").unwrap(), 1920, 1080);
-        assert!(hd.materials.iter().find(|m| m.name == "skin").unwrap().subsurface, "{hd}");
+        assert!(
+            hd.materials
+                .iter()
+                .find(|m| m.name == "skin")
+                .unwrap()
+                .subsurface,
+            "{hd}"
+        );
     }
 }

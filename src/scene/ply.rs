@@ -20,7 +20,11 @@ pub enum PlyError {
     #[error("PLY data ends early while reading {0}")]
     Truncated(&'static str),
     #[error("face {face} refers to vertex {index}, but there are only {count} vertices")]
-    IndexOutOfRange { face: usize, index: i64, count: usize },
+    IndexOutOfRange {
+        face: usize,
+        index: i64,
+        count: usize,
+    },
     #[error("face {face} has {count} corners; a face needs at least 3")]
     DegenerateFace { face: usize, count: usize },
     #[error("vertex {0} has a non-finite coordinate")]
@@ -79,8 +83,15 @@ impl Scalar {
 
 #[derive(Debug)]
 enum Property {
-    Scalar { name: String, ty: Scalar },
-    List { name: String, count: Scalar, item: Scalar },
+    Scalar {
+        name: String,
+        ty: Scalar,
+    },
+    List {
+        name: String,
+        count: Scalar,
+        item: Scalar,
+    },
 }
 
 #[derive(Debug)]
@@ -146,7 +157,10 @@ fn parse_header(bytes: &[u8]) -> Result<(Vec<Element>, &[u8]), PlyError> {
     if !bytes.starts_with(b"ply") {
         return Err(PlyError::NotPly);
     }
-    let end = bytes.windows(END.len()).position(|w| w == END).ok_or(PlyError::NoEndHeader)?;
+    let end = bytes
+        .windows(END.len())
+        .position(|w| w == END)
+        .ok_or(PlyError::NoEndHeader)?;
     let mut body_start = end + END.len();
     if bytes.get(body_start) == Some(&b'\r') {
         body_start += 1;
@@ -158,7 +172,10 @@ fn parse_header(bytes: &[u8]) -> Result<(Vec<Element>, &[u8]), PlyError> {
     let mut elements: Vec<Element> = Vec::new();
     for (i, line) in text.lines().enumerate() {
         let line_no = i + 1;
-        let bad = |message: String| PlyError::Header { line: line_no, message };
+        let bad = |message: String| PlyError::Header {
+            line: line_no,
+            message,
+        };
         let words: Vec<&str> = line.split_whitespace().collect();
         match words.as_slice() {
             ["ply"] | [] => {}
@@ -169,19 +186,38 @@ fn parse_header(bytes: &[u8]) -> Result<(Vec<Element>, &[u8]), PlyError> {
                 }
             }
             ["element", name, count] => {
-                let count = count.parse().map_err(|_| bad(format!("bad element count {count:?}")))?;
-                elements.push(Element { name: (*name).to_string(), count, properties: vec![] });
+                let count = count
+                    .parse()
+                    .map_err(|_| bad(format!("bad element count {count:?}")))?;
+                elements.push(Element {
+                    name: (*name).to_string(),
+                    count,
+                    properties: vec![],
+                });
             }
             ["property", "list", count, item, name] => {
-                let count = Scalar::parse(count).ok_or_else(|| bad(format!("unknown type {count}")))?;
-                let item = Scalar::parse(item).ok_or_else(|| bad(format!("unknown type {item}")))?;
-                let el = elements.last_mut().ok_or_else(|| bad("property before element".into()))?;
-                el.properties.push(Property::List { name: (*name).to_string(), count, item });
+                let count =
+                    Scalar::parse(count).ok_or_else(|| bad(format!("unknown type {count}")))?;
+                let item =
+                    Scalar::parse(item).ok_or_else(|| bad(format!("unknown type {item}")))?;
+                let el = elements
+                    .last_mut()
+                    .ok_or_else(|| bad("property before element".into()))?;
+                el.properties.push(Property::List {
+                    name: (*name).to_string(),
+                    count,
+                    item,
+                });
             }
             ["property", ty, name] => {
                 let ty = Scalar::parse(ty).ok_or_else(|| bad(format!("unknown type {ty}")))?;
-                let el = elements.last_mut().ok_or_else(|| bad("property before element".into()))?;
-                el.properties.push(Property::Scalar { name: (*name).to_string(), ty });
+                let el = elements
+                    .last_mut()
+                    .ok_or_else(|| bad("property before element".into()))?;
+                el.properties.push(Property::Scalar {
+                    name: (*name).to_string(),
+                    ty,
+                });
             }
             _ => return Err(bad(format!("cannot read {line:?}"))),
         }
@@ -191,7 +227,9 @@ fn parse_header(bytes: &[u8]) -> Result<(Vec<Element>, &[u8]), PlyError> {
 
 fn read_vertices(cur: &mut Cursor, el: &Element) -> Result<Vec<Vec3>, PlyError> {
     let slot = |axis: &str| {
-        el.properties.iter().position(|p| matches!(p, Property::Scalar { name, .. } if name == axis))
+        el.properties
+            .iter()
+            .position(|p| matches!(p, Property::Scalar { name, .. } if name == axis))
     };
     let (Some(xi), Some(yi), Some(zi)) = (slot("x"), slot("y"), slot("z")) else {
         return Err(PlyError::NoPositions);
@@ -220,7 +258,11 @@ fn read_vertices(cur: &mut Cursor, el: &Element) -> Result<Vec<Vec3>, PlyError> 
 
 fn read_faces(cur: &mut Cursor, el: &Element, vertex_count: usize) -> Result<Vec<u32>, PlyError> {
     let is_indices = |name: &str| name == "vertex_indices" || name == "vertex_index";
-    if !el.properties.iter().any(|p| matches!(p, Property::List { name, .. } if is_indices(name))) {
+    if !el
+        .properties
+        .iter()
+        .any(|p| matches!(p, Property::List { name, .. } if is_indices(name)))
+    {
         return Err(PlyError::NoFaces);
     }
     let mut out = Vec::with_capacity(el.count * 3);
@@ -244,7 +286,11 @@ fn read_faces(cur: &mut Cursor, el: &Element, vertex_count: usize) -> Result<Vec
                     for _ in 0..n {
                         let index = cur.scalar(*item, "faces")? as i64;
                         if index < 0 || index as usize >= vertex_count {
-                            return Err(PlyError::IndexOutOfRange { face, index, count: vertex_count });
+                            return Err(PlyError::IndexOutOfRange {
+                                face,
+                                index,
+                                count: vertex_count,
+                            });
                         }
                         corners.push(index as u32);
                     }
@@ -308,7 +354,14 @@ element face 1\nproperty list uchar int vertex_indices\nend_header\n"
     #[test]
     fn bad_files_say_what_is_wrong() {
         assert_eq!(parse_ply(b"solid stl"), Err(PlyError::NotPly));
-        assert_eq!(parse_ply(&quad_ply(9)), Err(PlyError::IndexOutOfRange { face: 0, index: 9, count: 4 }));
+        assert_eq!(
+            parse_ply(&quad_ply(9)),
+            Err(PlyError::IndexOutOfRange {
+                face: 0,
+                index: 9,
+                count: 4
+            })
+        );
         let mut short = quad_ply(3);
         short.truncate(short.len() - 3);
         assert_eq!(parse_ply(&short), Err(PlyError::Truncated("faces")));

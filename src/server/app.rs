@@ -24,32 +24,53 @@ async fn readyz(State(state): State<Arc<ServerState>>) -> Response {
     if state.slots.available_permits() > 0 {
         (StatusCode::OK, "ready\n").into_response()
     } else {
-        (StatusCode::SERVICE_UNAVAILABLE, format!("at capacity: {} sessions\n", state.max_sessions)).into_response()
+        (
+            StatusCode::SERVICE_UNAVAILABLE,
+            format!("at capacity: {} sessions\n", state.max_sessions),
+        )
+            .into_response()
     }
 }
 
 async fn metrics_text() -> Response {
     match super::metrics::handle() {
-        Some(h) => ([(header::CONTENT_TYPE, "text/plain; version=0.0.4")], h.render()).into_response(),
-        None => (StatusCode::SERVICE_UNAVAILABLE, "metrics are unavailable in this process\n").into_response(),
+        Some(h) => (
+            [(header::CONTENT_TYPE, "text/plain; version=0.0.4")],
+            h.render(),
+        )
+            .into_response(),
+        None => (
+            StatusCode::SERVICE_UNAVAILABLE,
+            "metrics are unavailable in this process\n",
+        )
+            .into_response(),
     }
 }
 
 async fn websocket(State(state): State<Arc<ServerState>>, ws: WebSocketUpgrade) -> Response {
     let permit = state.slots.clone().try_acquire_owned().ok();
     let token = state.sessions.token();
-    let ws = ws.max_message_size(HARD_MESSAGE_LIMIT).max_frame_size(HARD_MESSAGE_LIMIT);
+    let ws = ws
+        .max_message_size(HARD_MESSAGE_LIMIT)
+        .max_frame_size(HARD_MESSAGE_LIMIT);
     let Some(permit) = permit else {
         // Refused politely over the socket, so browsers see the reason: 1013 "try again later".
         ::metrics::counter!("fovea_sessions_refused_total").increment(1);
         let max = state.max_sessions;
         return ws.on_upgrade(move |mut socket| async move {
             let reason = format!("server at capacity ({max} sessions); try again later");
-            let _ = socket.send(Message::Close(Some(CloseFrame { code: 1013, reason: reason.into() }))).await;
+            let _ = socket
+                .send(Message::Close(Some(CloseFrame {
+                    code: 1013,
+                    reason: reason.into(),
+                })))
+                .await;
             drop(token);
         });
     };
-    let id = state.next_session.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+    let id = state
+        .next_session
+        .fetch_add(1, std::sync::atomic::Ordering::Relaxed);
     ws.on_upgrade(move |socket| async move {
         ::metrics::gauge!("fovea_sessions_active").increment(1.0);
         ::metrics::counter!("fovea_sessions_total").increment(1);
@@ -63,10 +84,17 @@ async fn websocket(State(state): State<Arc<ServerState>>, ws: WebSocketUpgrade) 
 async fn static_file(uri: Uri) -> Response {
     match assets::find(uri.path()) {
         Some((mime, body)) => (
-            [(header::CONTENT_TYPE, mime), (header::CACHE_CONTROL, "no-cache")],
+            [
+                (header::CONTENT_TYPE, mime),
+                (header::CACHE_CONTROL, "no-cache"),
+            ],
             body,
         )
             .into_response(),
-        None => (StatusCode::NOT_FOUND, format!("no such page: {}\n", uri.path())).into_response(),
+        None => (
+            StatusCode::NOT_FOUND,
+            format!("no such page: {}\n", uri.path()),
+        )
+            .into_response(),
     }
 }

@@ -65,23 +65,39 @@ pub struct ServerOptions {
 
 impl Default for ServerOptions {
     fn default() -> Self {
-        ServerOptions { record_dir: None, max_sessions: 16, stall_timeout: Duration::from_secs(10) }
+        ServerOptions {
+            record_dir: None,
+            max_sessions: 16,
+            stall_timeout: Duration::from_secs(10),
+        }
     }
 }
 
 /// Serves until `shutdown` is cancelled, then closes every session with 1001 and returns.
-pub async fn run(listener: TcpListener, render: RenderHandle, shutdown: CancellationToken) -> std::io::Result<()> {
+pub async fn run(
+    listener: TcpListener,
+    render: RenderHandle,
+    shutdown: CancellationToken,
+) -> std::io::Result<()> {
     run_with(listener, render, shutdown, ServerOptions::default()).await
 }
 
-pub async fn run_with(listener: TcpListener, render: RenderHandle, shutdown: CancellationToken, options: ServerOptions) -> std::io::Result<()> {
+pub async fn run_with(
+    listener: TcpListener,
+    render: RenderHandle,
+    shutdown: CancellationToken,
+    options: ServerOptions,
+) -> std::io::Result<()> {
     if let Some(dir) = &options.record_dir {
         std::fs::create_dir_all(dir)?;
     }
     let scenes = crate::scene::builtin_names()
         .into_iter()
         .filter_map(|name| match crate::scene::Scene::builtin(&name) {
-            Ok(s) => Some(SceneInfo { name, triangles: s.mesh.triangle_count() }),
+            Ok(s) => Some(SceneInfo {
+                name,
+                triangles: s.mesh.triangle_count(),
+            }),
             Err(e) => {
                 tracing::error!("built-in scene {name} does not load: {e}");
                 None
@@ -109,9 +125,14 @@ pub async fn run_with(listener: TcpListener, render: RenderHandle, shutdown: Can
             tracing::warn!("cannot set TCP_NODELAY: {e}");
         }
     });
-    axum::serve(listener, app).with_graceful_shutdown(shutdown.cancelled_owned()).await?;
+    axum::serve(listener, app)
+        .with_graceful_shutdown(shutdown.cancelled_owned())
+        .await?;
     state.sessions.close();
-    if tokio::time::timeout(DRAIN, state.sessions.wait()).await.is_err() {
+    if tokio::time::timeout(DRAIN, state.sessions.wait())
+        .await
+        .is_err()
+    {
         tracing::warn!("some sessions did not close within {DRAIN:?}");
     }
     Ok(())

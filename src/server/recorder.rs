@@ -24,7 +24,13 @@ impl Recorder {
         let partial = dir.join(format!("session-{session}.csv.partial"));
         let mut writer = BufWriter::new(File::create(&partial)?);
         writer.write_all(b"t_ms,x,y,pupil_mm\n")?;
-        Ok(Recorder { writer, partial, path, t0: None, error: None })
+        Ok(Recorder {
+            writer,
+            partial,
+            path,
+            t0: None,
+            error: None,
+        })
     }
 
     /// Appends one sample; the first write error is kept and reported by `finish`.

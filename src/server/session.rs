@@ -14,11 +14,11 @@ use std::time::Instant;
 use axum::extract::ws::{CloseFrame, Message, WebSocket};
 use futures_util::{SinkExt, StreamExt};
 
+use super::recorder::Recorder;
 use super::ServerState;
 use crate::encode;
 use crate::foveation::{Settings, PRESETS};
 use crate::gaze::prediction::Predictor;
-use super::recorder::Recorder;
 use crate::protocol::{
     encode_frame, parse_client_message, ClientMessage, ErrorCode, FrameHeader, Gaze, GazeUsed,
     Hello, ProtocolError, ServerMessage, StageTimes, Welcome, PROTOCOL_VERSION,
@@ -151,7 +151,14 @@ pub async fn run(socket: WebSocket, state: Arc<ServerState>, id: u64) {
             let started = Instant::now();
             // A client that stops reading fills its socket; it may not hold the session forever.
             let send = tokio::time::timeout(state.stall_timeout, tx.send(reply));
-            let sent_ok = matches!(tracing::Instrument::instrument(send, tracing::debug_span!("send", session = id, frame)).await, Ok(Ok(())));
+            let sent_ok = matches!(
+                tracing::Instrument::instrument(
+                    send,
+                    tracing::debug_span!("send", session = id, frame)
+                )
+                .await,
+                Ok(Ok(()))
+            );
             if frame && sent_ok {
                 ::metrics::counter!("fovea_frames_sent_total").increment(1);
                 super::metrics::stage("send", started.elapsed().as_secs_f64() * 1e3);
@@ -199,7 +206,11 @@ impl Session {
                 if self.latest.is_some() {
                     self.coalesced += 1;
                     ::metrics::counter!("fovea_gaze_coalesced_total").increment(1);
-                    let max = self.hello.as_ref().map(|h| h.max_in_flight as usize).unwrap_or(0);
+                    let max = self
+                        .hello
+                        .as_ref()
+                        .map(|h| h.max_in_flight as usize)
+                        .unwrap_or(0);
                     if self.unacked.len() >= max {
                         // The client has no credit: this sample's frame is skipped, not queued.
                         ::metrics::counter!("fovea_frames_skipped_total").increment(1);
@@ -239,7 +250,10 @@ impl Session {
                     Some(
                         ProtocolError::new(
                             ErrorCode::BadAck,
-                            format!("frame {} is not awaiting an ack (sent so far: {})", ack.frame, self.frames_made),
+                            format!(
+                                "frame {} is not awaiting an ack (sent so far: {})",
+                                ack.frame, self.frames_made
+                            ),
                         )
                         .into(),
                     )
@@ -250,13 +264,21 @@ impl Session {
 
     fn on_hello(&mut self, hello: Hello, state: &ServerState, id: u64) -> ServerMessage {
         if self.hello.is_some() {
-            return ProtocolError::new(ErrorCode::AlreadyStarted, "this session already said hello; open a new socket to start over").into();
+            return ProtocolError::new(
+                ErrorCode::AlreadyStarted,
+                "this session already said hello; open a new socket to start over",
+            )
+            .into();
         }
         let Some(scene) = state.scenes.iter().find(|s| s.name == hello.scene) else {
             let names: Vec<&str> = state.scenes.iter().map(|s| s.name.as_str()).collect();
             return ProtocolError::new(
                 ErrorCode::UnknownScene,
-                format!("unknown scene {:?}; available: {}", hello.scene, names.join(", ")),
+                format!(
+                    "unknown scene {:?}; available: {}",
+                    hello.scene,
+                    names.join(", ")
+                ),
             )
             .into();
         };
@@ -280,7 +302,11 @@ impl Session {
         let d = hello.display;
         let frame_deg = [
             2.0 * (0.5 * d.width_cm / d.distance_cm).atan().to_degrees(),
-            2.0 * (0.5 * d.width_cm * f64::from(hello.height) / f64::from(hello.width) / d.distance_cm).atan().to_degrees(),
+            2.0 * (0.5 * d.width_cm * f64::from(hello.height)
+                / f64::from(hello.width)
+                / d.distance_cm)
+                .atan()
+                .to_degrees(),
         ];
         self.predictor = Some(Predictor::new(frame_deg));
         self.hello = Some(hello);
@@ -320,12 +346,26 @@ impl Session {
             }
         }
         request.marker = true;
-        request.pupil_mm = self.pupil_mm.map(|p| p as f32).unwrap_or(crate::render::DEFAULT_PUPIL_MM);
+        request.pupil_mm = self
+            .pupil_mm
+            .map(|p| p as f32)
+            .unwrap_or(crate::render::DEFAULT_PUPIL_MM);
         request.display = hello.display;
         request.settings = self.settings.clone();
         request.stream = stream;
-        request.time_s = self.hello_at.map(|t| t.elapsed().as_secs_f64()).unwrap_or(0.0);
-        Some(FrameJob { frame: self.frames_made, gaze, raw: predicted.then_some(raw), samples: self.samples, arrived, request, hello: hello.clone() })
+        request.time_s = self
+            .hello_at
+            .map(|t| t.elapsed().as_secs_f64())
+            .unwrap_or(0.0);
+        Some(FrameJob {
+            frame: self.frames_made,
+            gaze,
+            raw: predicted.then_some(raw),
+            samples: self.samples,
+            arrived,
+            request,
+            hello: hello.clone(),
+        })
     }
 }
 
@@ -341,7 +381,11 @@ impl Session {
 }
 
 fn unknown_preset(name: &str) -> ServerMessage {
-    ProtocolError::new(ErrorCode::UnknownPreset, format!("unknown preset {name:?}; available: {}", PRESETS.join(", "))).into()
+    ProtocolError::new(
+        ErrorCode::UnknownPreset,
+        format!("unknown preset {name:?}; available: {}", PRESETS.join(", ")),
+    )
+    .into()
 }
 
 fn no_hello(what: &str) -> ServerMessage {
@@ -349,12 +393,22 @@ fn no_hello(what: &str) -> ServerMessage {
 }
 
 /// Renders on the render thread, encodes on the blocking pool, and packs the binary message.
-async fn make_frame(state: Arc<ServerState>, job: FrameJob) -> Result<(Vec<u8>, Instant), ProtocolError> {
+async fn make_frame(
+    state: Arc<ServerState>,
+    job: FrameJob,
+) -> Result<(Vec<u8>, Instant), ProtocolError> {
     let failed = |what: &str, e: &dyn std::fmt::Display| {
-        ProtocolError::new(ErrorCode::RenderFailed, format!("frame {}: {what}: {e}", job.frame))
+        ProtocolError::new(
+            ErrorCode::RenderFailed,
+            format!("frame {}: {what}: {e}", job.frame),
+        )
     };
     let before_queue = Instant::now();
-    let rendered = state.render.render(job.request.clone()).await.map_err(|e| failed("render", &e))?;
+    let rendered = state
+        .render
+        .render(job.request.clone())
+        .await
+        .map_err(|e| failed("render", &e))?;
     ::metrics::counter!("fovea_frames_rendered_total").increment(1);
     let queue = (before_queue - job.arrived).as_secs_f64() * 1e3 + rendered.queue_ms;
     let frame = rendered.frame;
@@ -381,8 +435,14 @@ async fn make_frame(state: Arc<ServerState>, job: FrameJob) -> Result<(Vec<u8>, 
         frame: job.frame,
         seq: job.gaze.map(|g| g.seq),
         t_ms: job.gaze.map(|g| g.t_ms),
-        gaze: GazeUsed { x: f64::from(x), y: f64::from(y) },
-        raw_gaze: job.raw.map(|[x, y]| GazeUsed { x: f64::from(x), y: f64::from(y) }),
+        gaze: GazeUsed {
+            x: f64::from(x),
+            y: f64::from(y),
+        },
+        raw_gaze: job.raw.map(|[x, y]| GazeUsed {
+            x: f64::from(x),
+            y: f64::from(y),
+        }),
         width: w,
         height: h,
         codec,

@@ -19,15 +19,36 @@ impl CompactPass {
         let layout = gpu::layout(
             device,
             LABEL,
-            &[gpu::uniform(0, false), gpu::storage_buffer(1, true), gpu::storage_buffer(2, false), gpu::storage_buffer(3, false)],
+            &[
+                gpu::uniform(0, false),
+                gpu::storage_buffer(1, true),
+                gpu::storage_buffer(2, false),
+                gpu::storage_buffer(3, false),
+            ],
         );
         let compact = gpu::compute_pipeline(device, LABEL, &module, "main", &layout);
-        let args = gpu::compute_pipeline(device, "compact.indirect_args", &module, "indirect_args", &layout);
-        CompactPass { compact, args, layout }
+        let args = gpu::compute_pipeline(
+            device,
+            "compact.indirect_args",
+            &module,
+            "indirect_args",
+            &layout,
+        );
+        CompactPass {
+            compact,
+            args,
+            layout,
+        }
     }
 
     /// `counter` must be zeroed before this runs (the caller clears it in the same encoder).
-    pub fn encode(&self, encoder: &mut wgpu::CommandEncoder, bind_group: &wgpu::BindGroup, size: (u32, u32), timer: &mut PassTimer) {
+    pub fn encode(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        bind_group: &wgpu::BindGroup,
+        size: (u32, u32),
+        timer: &mut PassTimer,
+    ) {
         gpu::dispatch_frame(encoder, LABEL, &self.compact, bind_group, size, timer);
         let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
             label: Some("compact.indirect_args"),

@@ -10,6 +10,11 @@ pub fn new(device: &wgpu::Device) -> FramePass {
         device,
         "dof",
         SHADER,
-        &[gpu::uniform(0, false), gpu::storage_buffer(1, true), gpu::texture(2, FLOAT), gpu::storage_buffer(3, false)],
+        &[
+            gpu::uniform(0, false),
+            gpu::storage_buffer(1, true),
+            gpu::texture(2, FLOAT),
+            gpu::storage_buffer(3, false),
+        ],
     )
 }

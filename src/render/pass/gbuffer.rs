@@ -55,7 +55,11 @@ pub struct GBufferTargets<'a> {
 impl GBufferPass {
     pub fn new(device: &wgpu::Device) -> GBufferPass {
         let module = gpu::shader(device, LABEL, SHADER);
-        let layout = gpu::layout(device, LABEL, &[gpu::uniform(0, false), gpu::storage_buffer(1, true)]);
+        let layout = gpu::layout(
+            device,
+            LABEL,
+            &[gpu::uniform(0, false), gpu::storage_buffer(1, true)],
+        );
         let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
             label: Some(LABEL),
             bind_group_layouts: &[Some(&layout)],
@@ -71,7 +75,10 @@ impl GBufferPass {
                 compilation_options: Default::default(),
                 buffers: &[Some(VERTEX_LAYOUT)],
             },
-            primitive: wgpu::PrimitiveState { cull_mode: Some(wgpu::Face::Back), ..Default::default() },
+            primitive: wgpu::PrimitiveState {
+                cull_mode: Some(wgpu::Face::Back),
+                ..Default::default()
+            },
             depth_stencil: Some(wgpu::DepthStencilState {
                 format: DEPTH,
                 depth_write_enabled: Some(true),
@@ -84,7 +91,11 @@ impl GBufferPass {
                 module: &module,
                 entry_point: Some("fs_main"),
                 compilation_options: Default::default(),
-                targets: &[target(NORMAL_DISTANCE), target(ALBEDO), target(BLURRED_NORMAL)],
+                targets: &[
+                    target(NORMAL_DISTANCE),
+                    target(ALBEDO),
+                    target(BLURRED_NORMAL),
+                ],
             }),
             multiview_mask: None,
             cache: None,
@@ -113,7 +124,11 @@ impl GBufferPass {
             contents: bytemuck::cast_slice(&mesh.indices),
             usage: wgpu::BufferUsages::INDEX,
         });
-        MeshBuffers { vertices, indices, index_count: mesh.indices.len() as u32 }
+        MeshBuffers {
+            vertices,
+            indices,
+            index_count: mesh.indices.len() as u32,
+        }
     }
 
     pub fn encode(
@@ -129,20 +144,34 @@ impl GBufferPass {
                 view,
                 depth_slice: None,
                 resolve_target: None,
-                ops: wgpu::Operations { load: wgpu::LoadOp::Clear(color), store: wgpu::StoreOp::Store },
+                ops: wgpu::Operations {
+                    load: wgpu::LoadOp::Clear(color),
+                    store: wgpu::StoreOp::Store,
+                },
             })
         };
         let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
             label: Some(LABEL),
             color_attachments: &[
                 // Distance −1 marks "no surface": it can never pass the reprojection test.
-                clear(targets.normal_distance, wgpu::Color { r: 0.0, g: 0.0, b: 0.0, a: -1.0 }),
+                clear(
+                    targets.normal_distance,
+                    wgpu::Color {
+                        r: 0.0,
+                        g: 0.0,
+                        b: 0.0,
+                        a: -1.0,
+                    },
+                ),
                 clear(targets.albedo, wgpu::Color::TRANSPARENT),
                 clear(targets.blurred_normal, wgpu::Color::TRANSPARENT),
             ],
             depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
                 view: targets.depth,
-                depth_ops: Some(wgpu::Operations { load: wgpu::LoadOp::Clear(1.0), store: wgpu::StoreOp::Store }),
+                depth_ops: Some(wgpu::Operations {
+                    load: wgpu::LoadOp::Clear(1.0),
+                    store: wgpu::StoreOp::Store,
+                }),
                 stencil_ops: None,
             }),
             timestamp_writes: timer.render(LABEL),

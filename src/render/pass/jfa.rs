@@ -33,8 +33,17 @@ impl JfaPass {
     }
 
     /// Runs every step; `bind_groups[i]` reads the input of step i and writes its output.
-    pub fn encode(&self, encoder: &mut wgpu::CommandEncoder, bind_groups: &[&wgpu::BindGroup], size: (u32, u32), timer: &mut PassTimer) {
-        let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor { label: Some(LABEL), timestamp_writes: timer.compute(LABEL) });
+    pub fn encode(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        bind_groups: &[&wgpu::BindGroup],
+        size: (u32, u32),
+        timer: &mut PassTimer,
+    ) {
+        let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+            label: Some(LABEL),
+            timestamp_writes: timer.compute(LABEL),
+        });
         pass.set_pipeline(&self.pipeline);
         for (i, bg) in bind_groups.iter().enumerate() {
             pass.set_bind_group(0, *bg, &[(i as u64 * SLOT) as u32]);

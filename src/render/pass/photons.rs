@@ -33,7 +33,9 @@ struct PhotonUniform {
 }
 
 pub fn node_count() -> u64 {
-    (0..LEVELS).map(|l| u64::from((SIDE >> l).max(1)).pow(2)).sum()
+    (0..LEVELS)
+        .map(|l| u64::from((SIDE >> l).max(1)).pow(2))
+        .sum()
 }
 
 pub struct PhotonPass {
@@ -81,7 +83,10 @@ impl PhotonPass {
                 buffers: &[Some(VERTEX_LAYOUT)],
             },
             // Both faces: the light may see an object's inside through an open mesh.
-            primitive: wgpu::PrimitiveState { cull_mode: None, ..Default::default() },
+            primitive: wgpu::PrimitiveState {
+                cull_mode: None,
+                ..Default::default()
+            },
             depth_stencil: Some(wgpu::DepthStencilState {
                 format: wgpu::TextureFormat::Depth32Float,
                 depth_write_enabled: Some(true),
@@ -94,7 +99,10 @@ impl PhotonPass {
                 module: &module,
                 entry_point: Some("fs_main"),
                 compilation_options: Default::default(),
-                targets: &[target(wgpu::TextureFormat::Rgba32Float), target(wgpu::TextureFormat::Rgba32Float)],
+                targets: &[
+                    target(wgpu::TextureFormat::Rgba32Float),
+                    target(wgpu::TextureFormat::Rgba32Float),
+                ],
             }),
             multiview_mask: None,
             cache: None,
@@ -111,25 +119,83 @@ impl PhotonPass {
                 gpu::storage_buffer(6, false),
             ],
         });
-        let leaves = gpu::compute_pipeline(device, "pyramid.leaves", &pyramid_module, "leaves", &pyramid_layout);
-        let reduce = gpu::compute_pipeline(device, "pyramid.reduce", &pyramid_module, "reduce", &pyramid_layout);
-        PhotonPass { raster, raster_layout, leaves, reduce, pyramid_layout }
+        let leaves = gpu::compute_pipeline(
+            device,
+            "pyramid.leaves",
+            &pyramid_module,
+            "leaves",
+            &pyramid_layout,
+        );
+        let reduce = gpu::compute_pipeline(
+            device,
+            "pyramid.reduce",
+            &pyramid_module,
+            "reduce",
+            &pyramid_layout,
+        );
+        PhotonPass {
+            raster,
+            raster_layout,
+            leaves,
+            reduce,
+            pyramid_layout,
+        }
     }
 
     /// Allocates a scene's photon map; `materials` must mark every translucent material.
     pub fn create_map(&self, device: &wgpu::Device, materials: &wgpu::Buffer) -> PhotonMap {
-        let tex = |label, format, usage| gpu::texture_2d(device, label, (SIDE, SIDE), format, usage);
+        let tex =
+            |label, format, usage| gpu::texture_2d(device, label, (SIDE, SIDE), format, usage);
         let usage = wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::TEXTURE_BINDING;
-        let position = gpu::view(&tex("photons.position", wgpu::TextureFormat::Rgba32Float, usage));
-        let normal = gpu::view(&tex("photons.normal", wgpu::TextureFormat::Rgba32Float, usage));
-        let depth = gpu::view(&tex("photons.depth", wgpu::TextureFormat::Depth32Float, wgpu::TextureUsages::RENDER_ATTACHMENT));
-        let buffer = |label, size: u64, usage| device.create_buffer(&wgpu::BufferDescriptor { label: Some(label), size, usage, mapped_at_creation: false });
+        let position = gpu::view(&tex(
+            "photons.position",
+            wgpu::TextureFormat::Rgba32Float,
+            usage,
+        ));
+        let normal = gpu::view(&tex(
+            "photons.normal",
+            wgpu::TextureFormat::Rgba32Float,
+            usage,
+        ));
+        let depth = gpu::view(&tex(
+            "photons.depth",
+            wgpu::TextureFormat::Depth32Float,
+            wgpu::TextureUsages::RENDER_ATTACHMENT,
+        ));
+        let buffer = |label, size: u64, usage| {
+            device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some(label),
+                size,
+                usage,
+                mapped_at_creation: false,
+            })
+        };
         use wgpu::BufferUsages as B;
         let nodes = buffer("pyramid.nodes", node_count() * 32, B::STORAGE | B::COPY_SRC);
-        let uniform = buffer("photons.uniform", std::mem::size_of::<PhotonUniform>() as u64, B::UNIFORM | B::COPY_DST);
-        let levels = buffer("pyramid.levels", SLOT * u64::from(LEVELS), B::UNIFORM | B::COPY_DST);
-        let raster_bind = gpu::bind_at(device, LABEL, &self.raster_layout, &[(1, uniform.as_entire_binding()), (2, materials.as_entire_binding())]);
-        let level_binding = wgpu::BindingResource::Buffer(wgpu::BufferBinding { buffer: &levels, offset: 0, size: wgpu::BufferSize::new(16) });
+        let uniform = buffer(
+            "photons.uniform",
+            std::mem::size_of::<PhotonUniform>() as u64,
+            B::UNIFORM | B::COPY_DST,
+        );
+        let levels = buffer(
+            "pyramid.levels",
+            SLOT * u64::from(LEVELS),
+            B::UNIFORM | B::COPY_DST,
+        );
+        let raster_bind = gpu::bind_at(
+            device,
+            LABEL,
+            &self.raster_layout,
+            &[
+                (1, uniform.as_entire_binding()),
+                (2, materials.as_entire_binding()),
+            ],
+        );
+        let level_binding = wgpu::BindingResource::Buffer(wgpu::BufferBinding {
+            buffer: &levels,
+            offset: 0,
+            size: wgpu::BufferSize::new(16),
+        });
         let pyramid_bind = gpu::bind_at(
             device,
             PYRAMID_LABEL,
@@ -143,7 +209,17 @@ impl PhotonPass {
                 (6, nodes.as_entire_binding()),
             ],
         );
-        PhotonMap { nodes, uniform, levels, position, normal, depth, raster_bind, pyramid_bind, built_for: None }
+        PhotonMap {
+            nodes,
+            uniform,
+            levels,
+            position,
+            normal,
+            depth,
+            raster_bind,
+            pyramid_bind,
+            built_for: None,
+        }
     }
 
     /// Renders the photon map for light direction `to_light` and builds the pyramid.
@@ -160,16 +236,23 @@ impl PhotonPass {
     ) {
         // An orthographic light camera around the translucent objects' bounding sphere.
         let (centre, radius) = translucent_bounds(scene);
-        let up = if to_light.cross(Vec3::Y).length() < 1e-3 { Vec3::X } else { Vec3::Y };
+        let up = if to_light.cross(Vec3::Y).length() < 1e-3 {
+            Vec3::X
+        } else {
+            Vec3::Y
+        };
         let view = Mat4::look_at_rh(centre + to_light * (radius + 1.0), centre, up);
-        let proj = Mat4::orthographic_rh(-radius, radius, -radius, radius, 0.01, 2.0 * radius + 2.0);
+        let proj =
+            Mat4::orthographic_rh(-radius, radius, -radius, radius, 0.01, 2.0 * radius + 2.0);
         let texel = 2.0 * radius / SIDE as f32;
         let mm = scene.file.mm_per_unit as f32;
         let light = scene.file.light;
         let u = PhotonUniform {
             light_view_proj: (proj * view).to_cols_array_2d(),
             to_light: to_light.extend(0.0).to_array(),
-            light: (Vec3::from(light.color) * light.intensity).extend(0.0).to_array(),
+            light: (Vec3::from(light.color) * light.intensity)
+                .extend(0.0)
+                .to_array(),
             params: [SIDE as f32, (texel * mm) * (texel * mm), texel, 0.0],
         };
         queue.write_buffer(&map.uniform, 0, bytemuck::bytes_of(&u));
@@ -191,7 +274,10 @@ impl PhotonPass {
                     view,
                     depth_slice: None,
                     resolve_target: None,
-                    ops: wgpu::Operations { load: wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT), store: wgpu::StoreOp::Store },
+                    ops: wgpu::Operations {
+                        load: wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT),
+                        store: wgpu::StoreOp::Store,
+                    },
                 })
             };
             let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
@@ -199,7 +285,10 @@ impl PhotonPass {
                 color_attachments: &[attach(&map.position), attach(&map.normal)],
                 depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
                     view: &map.depth,
-                    depth_ops: Some(wgpu::Operations { load: wgpu::LoadOp::Clear(1.0), store: wgpu::StoreOp::Store }),
+                    depth_ops: Some(wgpu::Operations {
+                        load: wgpu::LoadOp::Clear(1.0),
+                        store: wgpu::StoreOp::Store,
+                    }),
                     stencil_ops: None,
                 }),
                 timestamp_writes: timer.render(LABEL),
@@ -212,7 +301,10 @@ impl PhotonPass {
             pass.set_index_buffer(mesh.indices.slice(..), wgpu::IndexFormat::Uint32);
             pass.draw_indexed(0..mesh.index_count, 0, 0..1);
         }
-        let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor { label: Some(PYRAMID_LABEL), timestamp_writes: timer.compute(PYRAMID_LABEL) });
+        let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+            label: Some(PYRAMID_LABEL),
+            timestamp_writes: timer.compute(PYRAMID_LABEL),
+        });
         for l in 0..LEVELS {
             let side = (SIDE >> l).max(1);
             pass.set_pipeline(if l == 0 { &self.leaves } else { &self.reduce });
@@ -237,14 +329,26 @@ pub fn translucent_bounds(scene: &Scene) -> (Vec3, f32) {
         .positions
         .iter()
         .zip(&scene.mesh.material)
-        .filter(|(_, m)| scene.materials.get(**m as usize).is_some_and(|(_, mat)| mat.is_translucent()))
+        .filter(|(_, m)| {
+            scene
+                .materials
+                .get(**m as usize)
+                .is_some_and(|(_, mat)| mat.is_translucent())
+        })
         .map(|(p, _)| *p)
         .collect();
     if pts.is_empty() {
         return (Vec3::ZERO, 1.0);
     }
-    let (lo, hi) = pts.iter().fold((Vec3::splat(f32::MAX), Vec3::splat(f32::MIN)), |(a, b), p| (a.min(*p), b.max(*p)));
+    let (lo, hi) = pts.iter().fold(
+        (Vec3::splat(f32::MAX), Vec3::splat(f32::MIN)),
+        |(a, b), p| (a.min(*p), b.max(*p)),
+    );
     let centre = 0.5 * (lo + hi);
-    let radius = pts.iter().map(|p| p.distance(centre)).fold(0.0, f32::max).max(1e-3);
+    let radius = pts
+        .iter()
+        .map(|p| p.distance(centre))
+        .fold(0.0, f32::max)
+        .max(1e-3);
     (centre, radius * 1.01)
 }

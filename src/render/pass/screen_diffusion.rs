@@ -31,18 +31,49 @@ impl ScreenDiffusionPass {
             ],
         );
         ScreenDiffusionPass {
-            irradiance: gpu::compute_pipeline(device, "screen_diffusion.irradiance", &module, "irradiance", &layout),
-            horizontal: gpu::compute_pipeline(device, "screen_diffusion.horizontal", &module, "blur_horizontal", &layout),
-            vertical: gpu::compute_pipeline(device, "screen_diffusion.vertical", &module, "blur_vertical", &layout),
+            irradiance: gpu::compute_pipeline(
+                device,
+                "screen_diffusion.irradiance",
+                &module,
+                "irradiance",
+                &layout,
+            ),
+            horizontal: gpu::compute_pipeline(
+                device,
+                "screen_diffusion.horizontal",
+                &module,
+                "blur_horizontal",
+                &layout,
+            ),
+            vertical: gpu::compute_pipeline(
+                device,
+                "screen_diffusion.vertical",
+                &module,
+                "blur_vertical",
+                &layout,
+            ),
             layout,
         }
     }
 
     /// `to_b` writes buffer b from a (irradiance writes a... see targets); the three bind groups
     /// are (irradiance → a), (a → b), (b → a).
-    pub fn encode(&self, encoder: &mut wgpu::CommandEncoder, binds: [&wgpu::BindGroup; 3], size: (u32, u32), timer: &mut PassTimer) {
-        let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor { label: Some(LABEL), timestamp_writes: timer.compute(LABEL) });
-        for (pipeline, bind) in [(&self.irradiance, binds[0]), (&self.horizontal, binds[1]), (&self.vertical, binds[2])] {
+    pub fn encode(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        binds: [&wgpu::BindGroup; 3],
+        size: (u32, u32),
+        timer: &mut PassTimer,
+    ) {
+        let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+            label: Some(LABEL),
+            timestamp_writes: timer.compute(LABEL),
+        });
+        for (pipeline, bind) in [
+            (&self.irradiance, binds[0]),
+            (&self.horizontal, binds[1]),
+            (&self.vertical, binds[2]),
+        ] {
             pass.set_pipeline(pipeline);
             pass.set_bind_group(0, bind, &[]);
             pass.dispatch_workgroups(size.0.div_ceil(8), size.1.div_ceil(8), 1);

@@ -46,13 +46,22 @@ impl ShadePass {
         counter: &wgpu::Buffer,
         timer: &mut PassTimer,
     ) {
-        let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor { label: Some(LABEL), timestamp_writes: timer.compute(LABEL) });
+        let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+            label: Some(LABEL),
+            timestamp_writes: timer.compute(LABEL),
+        });
         pass.set_pipeline(&self.list);
         pass.set_bind_group(0, bind_group, &[]);
         pass.dispatch_workgroups_indirect(counter, 4);
     }
 
-    pub fn encode_grid(&self, encoder: &mut wgpu::CommandEncoder, bind_group: &wgpu::BindGroup, size: (u32, u32), timer: &mut PassTimer) {
+    pub fn encode_grid(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        bind_group: &wgpu::BindGroup,
+        size: (u32, u32),
+        timer: &mut PassTimer,
+    ) {
         gpu::dispatch_frame(encoder, LABEL, &self.grid, bind_group, size, timer);
     }
 }
