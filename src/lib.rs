@@ -19,6 +19,7 @@ pub mod gaze;
 pub mod optics;
 pub mod protocol;
 pub mod quality;
+pub mod radiosity;
 pub mod render;
 pub mod scene;
 pub mod server;

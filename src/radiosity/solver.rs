@@ -1,0 +1,545 @@
+//! The shooting loop: pick the patch with the most unshot power, send it to every vertex that
+//! sees it, subdivide elements the shot left with a steep gradient, repeat.
+
+use std::collections::HashMap;
+
+use glam::Vec3;
+
+mod build;
+
+use super::bvh::Bvh;
+use super::form_factor::{point_to_patch, Facet};
+use super::{lattice, luminance, Options, RadiosityError, Surface};
+
+#[derive(Debug, Clone)]
+struct Vertex {
+    pos: Vec3,
+    normal: Vec3,
+    /// Irradiance received so far, all shots; and from emitters' shots alone (direct light).
+    total: Vec3,
+    direct: Vec3,
+    /// Index into the output (the display mesh's vertex); `NO_OUTPUT` for an element's centre.
+    out: usize,
+}
+
+/// Elements closer to the shooter than this many areas (r² < k · A) average a grid of
+/// samples instead of reading their centre.
+const NEAR_SAMPLES: f32 = 9.0;
+/// Samples per side of that grid in a quad element.
+const QUAD_SAMPLES: u32 = 4;
+
+/// Marks the centre sample of an element, which is not a display vertex.
+const NO_OUTPUT: usize = usize::MAX;
+
+#[derive(Debug, Clone, Copy)]
+struct Cell {
+    surface: u32,
+    i0: u32,
+    j0: u32,
+    size: u32,
+    depth: u32,
+}
+
+#[derive(Debug, Clone)]
+struct Element {
+    patch: u32,
+    verts: [u32; 4],
+    /// The sample the element's received energy is measured at: its centre. Corner samples
+    /// alone miss most of what an element next to the shooter gets (a wall's bottom edge sees
+    /// the floor edge-on, yet the wall just above it is brightly lit).
+    centre: u32,
+    area: f32,
+    reflectance: Vec3,
+    /// Reflected radiosity (exitance) accumulated, and the part not yet shot.
+    radiosity: Vec3,
+    unshot: Vec3,
+    cell: Option<Cell>,
+}
+
+#[derive(Debug, Clone)]
+struct Patch {
+    /// Current leaf elements.
+    leaves: Vec<u32>,
+    area: f32,
+    /// Where shadow rays aim: on the patch, nudged off it along its normal.
+    target: Vec3,
+    facets: Vec<Facet>,
+    emitter: bool,
+}
+
+#[derive(Debug, Clone)]
+struct QuadInfo {
+    corners: [Vec3; 4],
+    normal: Vec3,
+    lattice: [u32; 2],
+    max_depth: u32,
+    first_out: usize,
+    points: HashMap<(u32, u32), u32>,
+}
+
+/// What one shot did.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Shot {
+    pub patch: usize,
+    /// Luminance of the power the patch sent.
+    pub power: f64,
+    /// Of that, the luminance of what receivers got (≤ power).
+    pub received: f64,
+    /// Of what was received, the luminance receivers absorbed rather than reflected.
+    pub absorbed: f64,
+    pub subdivided: usize,
+}
+
+/// Where the solution stands.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Stats {
+    pub shots: u32,
+    pub patches: usize,
+    pub elements: usize,
+    pub vertices: usize,
+    /// Luminance of the power emitters emit.
+    pub emitted: f64,
+    /// Luminance of the reflected power accumulated so far (the quantity that converges).
+    pub reflected: f64,
+    /// Unshot power over emitted power.
+    pub unshot_fraction: f64,
+}
+
+pub struct Solver {
+    options: Options,
+    bvh: Bvh,
+    margin: f32,
+    vertices: Vec<Vertex>,
+    elements: Vec<Element>,
+    patches: Vec<Patch>,
+    quads: HashMap<u32, QuadInfo>,
+    outputs: usize,
+    emitted: f64,
+    mean_exitance: f64,
+    total_area: f64,
+    shots: u32,
+}
+
+impl Solver {
+    pub fn new(surfaces: &[Surface], options: Options) -> Result<Solver, RadiosityError> {
+        let mut tris = Vec::new();
+        let (mut lo, mut hi) = (Vec3::splat(f32::MAX), Vec3::splat(f32::MIN));
+        for s in surfaces {
+            match s {
+                Surface::Quad { corners: c, .. } => {
+                    tris.push([c[0], c[1], c[2]]);
+                    tris.push([c[0], c[2], c[3]]);
+                }
+                Surface::Mesh {
+                    positions, indices, ..
+                } => {
+                    for t in indices.chunks_exact(3) {
+                        let p =
+                            |k: usize| positions.get(t[k] as usize).copied().unwrap_or_default();
+                        tris.push([p(0), p(1), p(2)]);
+                    }
+                }
+            }
+        }
+        for t in &tris {
+            for p in t {
+                lo = lo.min(*p);
+                hi = hi.max(*p);
+            }
+        }
+        let scale = (hi - lo).max_element().max(1e-6);
+        let mut solver = Solver {
+            options,
+            bvh: Bvh::new(&tris),
+            margin: 1e-4 * scale,
+            vertices: Vec::new(),
+            elements: Vec::new(),
+            patches: Vec::new(),
+            quads: HashMap::new(),
+            outputs: 0,
+            emitted: 0.0,
+            mean_exitance: 0.0,
+            total_area: 0.0,
+            shots: 0,
+        };
+        for (i, s) in surfaces.iter().enumerate() {
+            match s {
+                Surface::Quad {
+                    corners,
+                    cells,
+                    max_depth,
+                    reflectance,
+                    emission,
+                } => solver.add_quad(i, *corners, *cells, *max_depth, *reflectance, *emission)?,
+                Surface::Mesh {
+                    positions,
+                    normals,
+                    indices,
+                    reflectance,
+                    triangles_per_patch,
+                } => solver.add_mesh(
+                    i,
+                    positions,
+                    normals,
+                    indices,
+                    *reflectance,
+                    *triangles_per_patch,
+                )?,
+            }
+            solver.outputs += s.output_len();
+        }
+        if solver.emitted <= 0.0 {
+            return Err(RadiosityError::NoEmitter);
+        }
+        solver.total_area = solver.elements.iter().map(|e| f64::from(e.area)).sum();
+        solver.mean_exitance = solver.emitted / solver.total_area.max(1e-30);
+        Ok(solver)
+    }
+
+    pub fn stats(&self) -> Stats {
+        let leaves = self.patches.iter().map(|p| p.leaves.len()).sum();
+        let (mut reflected, mut unshot) = (0.0, 0.0);
+        for p in &self.patches {
+            for &e in &p.leaves {
+                let e = &self.elements[e as usize];
+                reflected += luminance(e.radiosity) * f64::from(e.area);
+                unshot += luminance(e.unshot) * f64::from(e.area);
+            }
+        }
+        Stats {
+            shots: self.shots,
+            patches: self.patches.len(),
+            elements: leaves,
+            vertices: self.vertices.len(),
+            emitted: self.emitted,
+            reflected,
+            unshot_fraction: unshot / self.emitted,
+        }
+    }
+
+    pub fn converged(&self) -> bool {
+        self.shots >= self.options.max_shots
+            || self.stats().unshot_fraction < self.options.stop_fraction
+    }
+
+    /// Unshot exitance of a patch (area-weighted over its leaves).
+    fn patch_unshot(&self, p: &Patch) -> Vec3 {
+        p.leaves
+            .iter()
+            .map(|&e| self.elements[e as usize].unshot * self.elements[e as usize].area)
+            .sum::<Vec3>()
+            / p.area
+    }
+
+    /// Shoots the patch with the most unshot power. `None` when nothing is left to shoot.
+    pub fn step(&mut self) -> Option<Shot> {
+        let (best, power) = self
+            .patches
+            .iter()
+            .enumerate()
+            .map(|(i, p)| (i, luminance(self.patch_unshot(p)) * f64::from(p.area)))
+            .max_by(|a, b| a.1.total_cmp(&b.1))?;
+        if !(power > 0.0) {
+            return None;
+        }
+        Some(self.shoot(best, power))
+    }
+
+    fn shoot(&mut self, p: usize, power: f64) -> Shot {
+        let unshot = self.patch_unshot(&self.patches[p]);
+        let mut factors = self.vertex_factors(p, 0..self.vertices.len());
+        let subdivided = self.subdivide(p, &mut factors, luminance(unshot));
+        // Element factors F_p→e = A_e · F̄(e→p) / A_p (reciprocity); the approximations can
+        // overshoot in sum, so scale the shot down to conserve energy when they do.
+        let patch_area = self.patches[p].area;
+        let element_factors = self.element_factors(p, &factors);
+        let sent: f64 = element_factors
+            .iter()
+            .map(|&(e, f)| f64::from(self.elements[e as usize].area * f))
+            .sum();
+        let scale = if sent > f64::from(patch_area) {
+            (f64::from(patch_area) / sent) as f32
+        } else {
+            1.0
+        };
+        let emitter = self.patches[p].emitter;
+        for &e in &self.patches[p].leaves.clone() {
+            self.elements[e as usize].unshot = Vec3::ZERO;
+        }
+        for (v, f) in self.vertices.iter_mut().zip(&factors) {
+            let de = unshot * (*f * scale);
+            v.total += de;
+            if emitter {
+                v.direct += de;
+            }
+        }
+        let (mut received, mut absorbed) = (0.0, 0.0);
+        for (e, f) in element_factors {
+            let el = &mut self.elements[e as usize];
+            let irradiance = unshot * (f * scale);
+            received += luminance(irradiance) * f64::from(el.area);
+            let db = el.reflectance * irradiance;
+            absorbed += luminance(irradiance - db) * f64::from(el.area);
+            el.radiosity += db;
+            el.unshot += db;
+        }
+        self.shots += 1;
+        Shot {
+            patch: p,
+            power,
+            received,
+            absorbed,
+            subdivided,
+        }
+    }
+
+    /// F̄(e → p) for every leaf element: the factor at its centre, or, for an element near the
+    /// shooter (where irradiance varies across it), the mean over a grid of samples inside it.
+    /// One sample per element would break reciprocity by ~20% between touching patches.
+    fn element_factors(&self, p: usize, factors: &[f32]) -> Vec<(u32, f32)> {
+        let patch = &self.patches[p];
+        let sampled = |pos: Vec3, normal: Vec3| {
+            let f = point_to_patch(pos, normal, &patch.facets);
+            let blocked = f > 0.0
+                && self
+                    .bvh
+                    .occluded(pos + normal * self.margin, patch.target, self.margin);
+            if blocked {
+                0.0
+            } else {
+                f
+            }
+        };
+        let mut out = Vec::new();
+        for q in &self.patches {
+            for &e in &q.leaves {
+                let el = &self.elements[e as usize];
+                let centre = &self.vertices[el.centre as usize];
+                let r2 = centre.pos.distance_squared(patch.target);
+                if r2 >= NEAR_SAMPLES * el.area.max(patch.area) {
+                    out.push((e, factors[el.centre as usize]));
+                    continue;
+                }
+                let mean = match el.cell {
+                    Some(c) => {
+                        let n = QUAD_SAMPLES;
+                        let mut sum = 0.0;
+                        for k in 0..n * n {
+                            let step = c.size as f32 / n as f32;
+                            let i = c.i0 as f32 + ((k % n) as f32 + 0.5) * step;
+                            let j = c.j0 as f32 + ((k / n) as f32 + 0.5) * step;
+                            sum += sampled(self.lattice_point(c.surface, i, j), centre.normal);
+                        }
+                        sum / (n * n) as f32
+                    }
+                    None => {
+                        let [a, b, c] = [0, 1, 2].map(|k| self.vertices[el.verts[k] as usize].pos);
+                        let points = [(a, b, c), (b, c, a), (c, a, b)];
+                        points
+                            .iter()
+                            .map(|(x, y, z)| {
+                                sampled(*x * (2.0 / 3.0) + (*y + *z) / 6.0, centre.normal)
+                            })
+                            .sum::<f32>()
+                            / 3.0
+                    }
+                };
+                out.push((e, mean));
+            }
+        }
+        out
+    }
+
+    /// F(v → patch p) with visibility, for the given vertices, split across threads.
+    fn vertex_factors(&self, p: usize, range: std::ops::Range<usize>) -> Vec<f32> {
+        let patch = &self.patches[p];
+        let threads = match self.options.threads {
+            0 => std::thread::available_parallelism().map_or(1, |n| n.get()),
+            n => n,
+        };
+        let verts = &self.vertices[range];
+        let chunk = verts.len().div_ceil(threads).max(64);
+        let one = |v: &Vertex| {
+            let f = point_to_patch(v.pos, v.normal, &patch.facets);
+            if f > 0.0
+                && self
+                    .bvh
+                    .occluded(v.pos + v.normal * self.margin, patch.target, self.margin)
+            {
+                0.0
+            } else {
+                f
+            }
+        };
+        if verts.len() <= chunk {
+            return verts.iter().map(one).collect();
+        }
+        std::thread::scope(|s| {
+            let handles: Vec<_> = verts
+                .chunks(chunk)
+                .map(|c| s.spawn(move || c.iter().map(one).collect::<Vec<f32>>()))
+                .collect();
+            handles
+                .into_iter()
+                .flat_map(|h| h.join().unwrap_or_default())
+                .collect()
+        })
+    }
+
+    /// Splits quad elements across which this shot's irradiance changes steeply, recursively
+    /// down to each quad's depth bound; new vertices get this shot's factor too.
+    fn subdivide(&mut self, shooter: usize, factors: &mut Vec<f32>, unshot_lum: f64) -> usize {
+        let floor = f64::from(self.options.subdivide_floor) * self.mean_exitance;
+        let mut work: Vec<u32> = self
+            .patches
+            .iter()
+            .flat_map(|q| q.leaves.iter().copied())
+            .filter(|&e| self.elements[e as usize].cell.is_some())
+            .collect();
+        let mut count = 0;
+        while let Some(e) = work.pop() {
+            let el = self.elements[e as usize].clone();
+            let Some(cell) = el.cell else { continue };
+            if cell.depth >= self.quads[&cell.surface].max_depth || el.patch as usize == shooter {
+                continue;
+            }
+            let f = [
+                el.verts[0],
+                el.verts[1],
+                el.verts[2],
+                el.verts[3],
+                el.centre,
+            ]
+            .map(|v| factors[v as usize]);
+            let (lo, hi) = f
+                .iter()
+                .fold((f32::MAX, f32::MIN), |(l, h), x| (l.min(*x), h.max(*x)));
+            let step = f64::from(hi - lo) * unshot_lum * luminance(el.reflectance);
+            if !(hi - lo > self.options.subdivide_relative * hi && step > floor) {
+                continue;
+            }
+            let h = cell.size / 2;
+            let first_new = self.vertices.len();
+            let mut children = Vec::with_capacity(4);
+            for (di, dj) in [(0, 0), (h, 0), (h, h), (0, h)] {
+                let c = Cell {
+                    surface: cell.surface,
+                    i0: cell.i0 + di,
+                    j0: cell.j0 + dj,
+                    size: h,
+                    depth: cell.depth + 1,
+                };
+                let verts = self.cell_vertices(c, Some((&el.verts, cell)));
+                let normal = self.quads[&cell.surface].normal;
+                let centre = self.sample(self.cell_centre(c), normal);
+                children.push(self.elements.len() as u32);
+                self.elements.push(Element {
+                    verts,
+                    centre,
+                    area: el.area / 4.0,
+                    cell: Some(c),
+                    ..el.clone()
+                });
+            }
+            let fresh = self.vertex_factors(shooter, first_new..self.vertices.len());
+            factors.extend(fresh);
+            let leaves = &mut self.patches[el.patch as usize].leaves;
+            leaves.retain(|x| *x != e);
+            leaves.extend(&children);
+            work.extend(children);
+            count += 1;
+        }
+        count
+    }
+
+    /// The display-only ambient irradiance of seed 004: the unshot energy, spread evenly over
+    /// the scene's area and multiplied by the interreflection series 1/(1 − ρ̄). ρ̄ is capped at
+    /// 0.99 so a scene of near-white walls gets a large but finite preview.
+    pub fn ambient(&self) -> Vec3 {
+        let (mut unshot, mut rho) = (Vec3::ZERO, Vec3::ZERO);
+        for p in &self.patches {
+            for &e in &p.leaves {
+                let e = &self.elements[e as usize];
+                unshot += e.unshot * e.area;
+                rho += e.reflectance * e.area;
+            }
+        }
+        let area = self.total_area.max(1e-30) as f32;
+        let series = (Vec3::ONE - (rho / area).min(Vec3::splat(0.99))).recip();
+        series * unshot / area
+    }
+
+    /// Irradiance per output vertex: (direct, indirect + ambient preview). Quad lattice points
+    /// no element has a vertex at take the bilinear value of the finest element over them.
+    pub fn irradiance(&self, with_ambient: bool) -> (Vec<Vec3>, Vec<Vec3>) {
+        let ambient = if with_ambient {
+            self.ambient()
+        } else {
+            Vec3::ZERO
+        };
+        let mut direct = vec![Vec3::ZERO; self.outputs];
+        let mut indirect = vec![ambient; self.outputs];
+        let mut cells: Vec<(Cell, [u32; 4])> = self
+            .patches
+            .iter()
+            .flat_map(|p| p.leaves.iter())
+            .filter_map(|&e| {
+                self.elements[e as usize]
+                    .cell
+                    .map(|c| (c, self.elements[e as usize].verts))
+            })
+            .collect();
+        cells.sort_by_key(|(c, _)| c.depth);
+        for (c, verts) in cells {
+            let q = &self.quads[&c.surface];
+            let [a, b, cc, d] = verts.map(|v| &self.vertices[v as usize]);
+            for j in 0..=c.size {
+                for i in 0..=c.size {
+                    let (s, t) = (i as f32 / c.size as f32, j as f32 / c.size as f32);
+                    let mix = |f: fn(&Vertex) -> Vec3| {
+                        (f(a) * (1.0 - s) + f(b) * s) * (1.0 - t)
+                            + (f(d) * (1.0 - s) + f(cc) * s) * t
+                    };
+                    let out = q.first_out + ((c.j0 + j) * (q.lattice[0] + 1) + c.i0 + i) as usize;
+                    direct[out] = mix(|v| v.direct);
+                    indirect[out] = mix(|v| v.total - v.direct) + ambient;
+                }
+            }
+        }
+        for v in self.vertices.iter().filter(|v| v.out != NO_OUTPUT) {
+            direct[v.out] = v.direct;
+            indirect[v.out] = v.total - v.direct + ambient;
+        }
+        (direct, indirect)
+    }
+
+    /// F_p→e for every current element (visibility included, before any energy scaling): the
+    /// form factors the solver uses, for checking against closed forms.
+    /// (patch of the element, element area, F_p→e) per leaf element.
+    pub fn patch_factors(&self, p: usize) -> Vec<(usize, f32, f32)> {
+        let factors = self.vertex_factors(p, 0..self.vertices.len());
+        let area = self.patches[p].area;
+        self.element_factors(p, &factors)
+            .into_iter()
+            .map(|(e, f)| {
+                let el = &self.elements[e as usize];
+                (el.patch as usize, el.area, el.area * f / area)
+            })
+            .collect()
+    }
+
+    pub fn patch_area(&self, p: usize) -> f32 {
+        self.patches[p].area
+    }
+
+    /// Radiosity (emission excluded) per patch, area-weighted over its leaves.
+    pub fn patch_radiosity(&self, p: usize) -> Vec3 {
+        let patch = &self.patches[p];
+        patch
+            .leaves
+            .iter()
+            .map(|&e| self.elements[e as usize].radiosity * self.elements[e as usize].area)
+            .sum::<Vec3>()
+            / patch.area
+    }
+}
