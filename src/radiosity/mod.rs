@@ -112,6 +112,25 @@ pub enum RadiosityError {
     NoEmitter,
 }
 
+/// The fraction of directions from `from` in which a ray meets one of the triangles: how
+/// enclosed a point is (1 inside a closed room, ~5/6 inside a box open on one side, small in
+/// an open scene). 256 directions on a Fibonacci sphere.
+pub fn enclosure(triangles: &[[Vec3; 3]], from: Vec3, reach: f32) -> f64 {
+    const RAYS: usize = 256;
+    let bvh = bvh::Bvh::new(triangles);
+    let golden = std::f32::consts::PI * (3.0 - 5f32.sqrt());
+    let hits = (0..RAYS)
+        .filter(|&k| {
+            let y = 1.0 - 2.0 * (k as f32 + 0.5) / RAYS as f32;
+            let r = (1.0 - y * y).sqrt();
+            let phi = golden * k as f32;
+            let dir = Vec3::new(r * phi.cos(), y, r * phi.sin());
+            bvh.occluded(from, from + dir * reach, 0.0)
+        })
+        .count();
+    hits as f64 / RAYS as f64
+}
+
 /// Linear RGB → luminance (Rec. 709), the scalar used to rank and measure power.
 pub fn luminance(c: Vec3) -> f64 {
     f64::from(c.dot(Vec3::new(0.2126, 0.7152, 0.0722)))

@@ -46,6 +46,13 @@ pub fn gpu_materials(scene: &Scene, plan: Option<&Plan>) -> Vec<GpuMaterial> {
                     z_v: rgba(dipole.map(|d| d.z_v)),
                     alpha: rgba(dipole.map(|d| d.albedo)),
                 },
+                // Shaded as its own exitance, carried in the albedo slot.
+                Material::Emitter { emission } => GpuMaterial {
+                    kind: 2,
+                    albedo: rgba(*emission),
+                    eta: 1.0,
+                    ..Default::default()
+                },
             }
         })
         .collect()

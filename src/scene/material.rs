@@ -50,6 +50,12 @@ pub enum MaterialSpec {
         #[serde(default, skip_serializing_if = "Option::is_none")]
         eta: Option<f64>,
     },
+    /// An area light: a surface that emits diffusely and reflects nothing.
+    Emitter {
+        /// Exitance in the light's units (1 is as bright as a white surface facing a unit
+        /// light), linear RGB, each ≥ 0.
+        emission: [f64; 3],
+    },
 }
 
 /// A validated material, ready for shading.
@@ -64,6 +70,9 @@ pub enum Material {
         eta: f64,
         dipole: [Dipole; 3],
     },
+    Emitter {
+        emission: [f64; 3],
+    },
 }
 
 impl Material {
@@ -74,6 +83,14 @@ impl Material {
                     return Err(format!("albedo {albedo:?} must lie in [0, 1]"));
                 }
                 Ok(Material::Opaque { albedo: *albedo })
+            }
+            MaterialSpec::Emitter { emission } => {
+                if emission.iter().any(|e| !(e.is_finite() && *e >= 0.0)) {
+                    return Err(format!("emission {emission:?} must be finite and ≥ 0"));
+                }
+                Ok(Material::Emitter {
+                    emission: *emission,
+                })
             }
             MaterialSpec::Translucent {
                 preset,
@@ -132,6 +149,15 @@ impl Material {
         match self {
             Material::Opaque { albedo } => *albedo,
             Material::Translucent { dipole, .. } => dipole.map(|d| d.total_reflectance()),
+            Material::Emitter { .. } => [0.0; 3],
+        }
+    }
+
+    /// Emitted exitance (zero but for emitters).
+    pub fn emission(&self) -> [f64; 3] {
+        match self {
+            Material::Emitter { emission } => *emission,
+            _ => [0.0; 3],
         }
     }
 
@@ -139,7 +165,7 @@ impl Material {
     /// that comes back out leaves, the largest over the channels; 0 for opaque materials.
     pub fn reach_mm(&self) -> f64 {
         match self {
-            Material::Opaque { .. } => 0.0,
+            Material::Opaque { .. } | Material::Emitter { .. } => 0.0,
             Material::Translucent { dipole, .. } => dipole
                 .iter()
                 .map(|d| d.reach(REACH_FRACTION))

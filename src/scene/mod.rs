@@ -39,6 +39,7 @@ const BUILTIN_SCENES: &[(&str, &str)] = &[
     ),
     ("opaque", include_str!("../../assets/scenes/opaque.json")),
     ("bunny", include_str!("../../assets/scenes/bunny.json")),
+    ("cornell", include_str!("../../assets/scenes/cornell.json")),
 ];
 
 /// Meshes scene files may refer to by file name.
@@ -49,7 +50,7 @@ const BUILTIN_MESHES: &[(&str, &[u8])] =
 pub enum SceneError {
     #[error("unknown scene {0:?} (available: {available})", available = builtin_names().join(", "))]
     Unknown(String),
-    #[error("scene {scene:?} refers to mesh {mesh:?}, which is not built in (available: bunny.ply, plane)")]
+    #[error("scene {scene:?} refers to mesh {mesh:?}, which is not built in (available: bunny.ply, plane, quad)")]
     UnknownMesh { scene: String, mesh: String },
     #[error("scene file {scene:?} is invalid: {source}")]
     Json {
@@ -96,8 +97,11 @@ impl Light {
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct ObjectSpec {
-    /// A built-in mesh: `bunny.ply`, or `plane` (a unit square in XZ facing +Y).
+    /// A built-in mesh: `bunny.ply`, `plane` (a unit square in XZ facing +Y), or `quad` (the
+    /// parallelogram `corners`, in scene units, counter-clockwise seen from its front).
     pub mesh: String,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub corners: Option<[[f32; 3]; 4]>,
     /// A key of the scene's `materials`.
     pub material: String,
     #[serde(default)]
@@ -114,6 +118,40 @@ fn one() -> f32 {
 
 fn ten() -> f64 {
     10.0
+}
+
+/// Whether the scene gets diffuse interreflection (progressive refinement radiosity).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum RadiosityMode {
+    /// The plan decides: on for an enclosed scene with an area light (see `Plan`).
+    #[default]
+    Auto,
+    On,
+    Off,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RadiositySpec {
+    #[serde(default)]
+    pub mode: RadiosityMode,
+    /// Largest patch edge, scene units (walls are split into patches no larger).
+    pub patch_size: f32,
+    /// How many times an element may halve where a shot leaves a steep gradient.
+    #[serde(default = "two")]
+    pub max_depth: u32,
+    /// Converged when the unshot power is below this fraction of the emitted power.
+    #[serde(default = "thousandth")]
+    pub stop_fraction: f64,
+}
+
+fn two() -> u32 {
+    2
+}
+
+fn thousandth() -> f64 {
+    0.001
 }
 
 /// A scene file as written on disk.
@@ -134,6 +172,21 @@ pub struct SceneFile {
     pub camera: Camera,
     pub materials: BTreeMap<String, MaterialSpec>,
     pub objects: Vec<ObjectSpec>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub radiosity: Option<RadiositySpec>,
+}
+
+/// Where an object's vertices sit in the combined mesh, and for a quad its lattice.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Placed {
+    pub material: u32,
+    pub first_vertex: u32,
+    pub vertex_count: u32,
+    pub first_index: u32,
+    pub index_count: u32,
+    /// For `quad` objects: corners, patches per side and subdivision depth (the mesh is the
+    /// finest lattice, so per-vertex radiosity shows every element).
+    pub quad: Option<([Vec3; 4], [u32; 2], u32)>,
 }
 
 /// A loaded, validated scene.
@@ -144,6 +197,8 @@ pub struct Scene {
     pub mesh: Mesh,
     /// Materials by id (the order of `file.materials`), with their names.
     pub materials: Vec<(String, Material)>,
+    /// One per object, in file order.
+    pub placed: Vec<Placed>,
 }
 
 pub fn builtin_names() -> Vec<String> {
@@ -222,7 +277,19 @@ impl Scene {
         if file.objects.is_empty() {
             return Err(invalid("a scene needs at least one object".into()));
         }
+        if let Some(r) = &file.radiosity {
+            if !(r.patch_size.is_finite() && r.patch_size > 0.0)
+                || r.max_depth > 6
+                || !(r.stop_fraction > 0.0 && r.stop_fraction < 1.0)
+            {
+                return Err(invalid(
+                    "radiosity: patch_size must be > 0, max_depth ≤ 6 and stop_fraction in (0, 1)"
+                        .into(),
+                ));
+            }
+        }
         let mut mesh = Mesh::default();
+        let mut placed = Vec::new();
         for (i, object) in file.objects.iter().enumerate() {
             let material = materials
                 .iter()
@@ -233,8 +300,22 @@ impl Scene {
                         object.material
                     ))
                 })?;
+            let mut quad = None;
             let ply = match object.mesh.as_str() {
                 "plane" => plane(),
+                "quad" => {
+                    let corners = object.corners.map(|c| c.map(Vec3::from)).ok_or_else(|| {
+                        invalid(format!("object {i}: a quad needs its four corners"))
+                    })?;
+                    let (cells, depth) = quad_lattice(&corners, file.radiosity.as_ref())
+                        .ok_or_else(|| {
+                            invalid(format!(
+                                "object {i}: quad corners must be finite and form a parallelogram"
+                            ))
+                        })?;
+                    quad = Some((corners, cells, depth));
+                    lattice_mesh(&corners, crate::radiosity::lattice(cells, depth))
+                }
                 name => {
                     let (_, bytes) =
                         BUILTIN_MESHES
@@ -272,12 +353,21 @@ impl Scene {
             let part = Mesh::with_smooth_normals(positions, ply.indices);
             // The cheap translucency rung shades with normals blurred over the light's reach.
             let reach_units = (materials[material].1.reach_mm() / file.mm_per_unit) as f32;
+            placed.push(Placed {
+                material: material as u32,
+                first_vertex: mesh.positions.len() as u32,
+                vertex_count: part.positions.len() as u32,
+                first_index: mesh.indices.len() as u32,
+                index_count: part.indices.len() as u32,
+                quad: quad.map(|(c, cells, d)| (c.map(|p| transform.transform_point3(p)), cells, d)),
+            });
             mesh.append(part.with_blurred_normals(reach_units), material as u32);
         }
         Ok(Scene {
             file,
             mesh,
             materials,
+            placed,
         })
     }
 
@@ -292,6 +382,85 @@ impl Scene {
     pub fn metres_per_unit(&self) -> f64 {
         self.file.mm_per_unit / 1000.0
     }
+
+    pub fn has_emitter(&self) -> bool {
+        self.materials
+            .iter()
+            .any(|(_, m)| m.emission().iter().any(|e| *e > 0.0))
+    }
+
+    /// The scene as the radiosity solver sees it: one surface per object, in the mesh's
+    /// vertex order, so the solver's per-vertex output lines up with the mesh.
+    pub fn radiosity_surfaces(&self) -> Vec<crate::radiosity::Surface> {
+        use crate::radiosity::Surface;
+        let v3 = |c: [f64; 3]| Vec3::new(c[0] as f32, c[1] as f32, c[2] as f32);
+        self.placed
+            .iter()
+            .map(|p| {
+                let m = &self.materials[p.material as usize].1;
+                match p.quad {
+                    Some((corners, cells, max_depth)) => Surface::Quad {
+                        corners,
+                        cells,
+                        max_depth,
+                        reflectance: v3(m.albedo()),
+                        emission: v3(m.emission()),
+                    },
+                    None => {
+                        let (v0, v1) = (p.first_vertex as usize, (p.first_vertex + p.vertex_count) as usize);
+                        let (i0, i1) = (p.first_index as usize, (p.first_index + p.index_count) as usize);
+                        Surface::Mesh {
+                            positions: self.mesh.positions[v0..v1].to_vec(),
+                            normals: self.mesh.normals[v0..v1].to_vec(),
+                            indices: self.mesh.indices[i0..i1].iter().map(|i| i - p.first_vertex).collect(),
+                            reflectance: v3(m.albedo()),
+                            triangles_per_patch: 16,
+                        }
+                    }
+                }
+            })
+            .collect()
+    }
+}
+
+/// Patches per side and subdivision depth for a quad: patches no larger than the scene's
+/// `radiosity.patch_size` (one patch without radiosity settings). `None` if not a parallelogram.
+fn quad_lattice(c: &[Vec3; 4], spec: Option<&RadiositySpec>) -> Option<([u32; 2], u32)> {
+    let (u, v) = (c[1] - c[0], c[3] - c[0]);
+    let closes = (c[0] + u + v - c[2]).length() <= 1e-4 * (u.length() + v.length());
+    if !(c.iter().all(|p| p.is_finite()) && closes && u.cross(v).length() > 0.0) {
+        return None;
+    }
+    Some(match spec {
+        Some(r) if r.mode != RadiosityMode::Off => {
+            let n = |len: f32| ((len / r.patch_size).ceil() as u32).clamp(1, 64);
+            ([n(u.length()), n(v.length())], r.max_depth)
+        }
+        _ => ([1, 1], 0),
+    })
+}
+
+/// A parallelogram as a grid of `lattice[0] × lattice[1]` cells, row by row from corner 0
+/// (the order the radiosity solver writes its per-vertex output in).
+fn lattice_mesh(c: &[Vec3; 4], lattice: [u32; 2]) -> PlyMesh {
+    let [lu, lv] = lattice;
+    let mut positions = Vec::with_capacity(((lu + 1) * (lv + 1)) as usize);
+    for j in 0..=lv {
+        for i in 0..=lu {
+            positions.push(
+                c[0] + (c[1] - c[0]) * (i as f32 / lu as f32) + (c[3] - c[0]) * (j as f32 / lv as f32),
+            );
+        }
+    }
+    let mut indices = Vec::with_capacity((lu * lv * 6) as usize);
+    let at = |i: u32, j: u32| j * (lu + 1) + i;
+    for j in 0..lv {
+        for i in 0..lu {
+            indices.extend([at(i, j), at(i + 1, j), at(i + 1, j + 1)]);
+            indices.extend([at(i, j), at(i + 1, j + 1), at(i, j + 1)]);
+        }
+    }
+    PlyMesh { positions, indices }
 }
 
 #[cfg(test)]

@@ -24,6 +24,7 @@ pub enum Pyramid {
 pub struct MaterialPlan {
     pub name: String,
     pub translucent: bool,
+    pub emitter: bool,
     /// Radius (mm) through which 90% of the re-emitted light leaves (`Material::reach_mm`).
     pub reach_mm: f64,
     /// What one pixel covers (mm) on the nearest object using this material.
@@ -40,8 +41,56 @@ pub struct Plan {
     pub materials: Vec<MaterialPlan>,
     pub photon_pass: bool,
     pub pyramid: Pyramid,
-    /// Radiosity is for enclosed scenes with diffuse interreflection; none of ours is enclosed.
+    /// Progressive refinement radiosity: for enclosed scenes with an area light.
     pub radiosity: bool,
+    /// Why radiosity is on or off, for the printout.
+    pub radiosity_reason: String,
+}
+
+/// Auto mode turns radiosity on when at least this share of directions from the scene's centre
+/// meets a surface: a box open on one side (a Cornell box) is ~5/6, a bunny on a floor ~1/2.
+pub const ENCLOSED: f64 = 2.0 / 3.0;
+
+/// Whether the scene needs radiosity, and why.
+fn radiosity(scene: &Scene) -> (bool, String) {
+    use super::RadiosityMode;
+    let mode = scene.file.radiosity.map(|r| r.mode).unwrap_or_default();
+    match mode {
+        RadiosityMode::Off => return (false, "off (the scene file turns it off)".into()),
+        _ if !scene.has_emitter() => {
+            return (
+                false,
+                "off (nothing emits: the scene is lit by its directional light alone)".into(),
+            )
+        }
+        RadiosityMode::On => return (true, "on (the scene file asks for it)".into()),
+        RadiosityMode::Auto => {}
+    }
+    let tris: Vec<[Vec3; 3]> = scene
+        .mesh
+        .indices
+        .chunks_exact(3)
+        .map(|t| [0, 1, 2].map(|k| scene.mesh.positions[t[k] as usize]))
+        .collect();
+    let (lo, hi) = scene.mesh.bounds();
+    let enclosed = crate::radiosity::enclosure(&tris, (lo + hi) / 2.0, 4.0 * (hi - lo).length());
+    if enclosed >= ENCLOSED {
+        (
+            true,
+            format!(
+                "on (enclosed: {:.0}% of directions from the centre meet a surface, and an area light shines)",
+                100.0 * enclosed
+            ),
+        )
+    } else {
+        (
+            false,
+            format!(
+                "off (open scene: only {:.0}% of directions from the centre meet a surface)",
+                100.0 * enclosed
+            ),
+        )
+    }
 }
 
 impl Plan {
@@ -72,6 +121,7 @@ impl Plan {
                 MaterialPlan {
                     name: name.clone(),
                     translucent: m.is_translucent(),
+                    emitter: matches!(m, Material::Emitter { .. }),
                     reach_mm,
                     footprint_mm,
                     subsurface: matches!(m, Material::Translucent { .. })
@@ -80,6 +130,7 @@ impl Plan {
             })
             .collect();
         let needs_dipole = materials.iter().any(|m| m.subsurface);
+        let (radiosity, radiosity_reason) = radiosity(scene);
         let orbit = scene.file.light.orbit_deg_per_s;
         let pyramid = match (needs_dipole, orbit != 0.0) {
             (false, _) => Pyramid::NotNeeded,
@@ -95,7 +146,8 @@ impl Plan {
             materials,
             photon_pass: needs_dipole,
             pyramid,
-            radiosity: false,
+            radiosity,
+            radiosity_reason,
         }
     }
 
@@ -113,7 +165,9 @@ impl fmt::Display for Plan {
             self.scene, self.width, self.height
         )?;
         for m in &self.materials {
-            if !m.translucent {
+            if m.emitter {
+                writeln!(f, "  material {:?}: area light", m.name)?;
+            } else if !m.translucent {
                 writeln!(f, "  material {:?}: opaque BRDF", m.name)?;
             } else if m.subsurface {
                 writeln!(
@@ -136,10 +190,7 @@ impl fmt::Display for Plan {
                 writeln!(f, "  light-space photon pass + quad-tree pyramid: rebuilt every frame (light orbits {orbit_deg_per_s}°/s)")?
             }
         }
-        writeln!(
-            f,
-            "  radiosity: off (open scene: no enclosure for light to bounce around in)"
-        )
+        writeln!(f, "  radiosity: {}", self.radiosity_reason)
     }
 }
 
@@ -153,6 +204,27 @@ mod tests {
         assert!(!p.photon_pass && p.pyramid == Pyramid::NotNeeded && !p.radiosity);
         assert!(p.materials.iter().all(|m| !m.subsurface));
         assert!(p.to_string().contains("photon pass: off"));
+    }
+
+    #[test]
+    fn radiosity_runs_in_the_enclosed_box_and_never_for_one_open_object() {
+        let box_plan = Plan::of(&Scene::builtin("cornell").unwrap(), 640, 480);
+        assert!(box_plan.radiosity, "{box_plan}");
+        assert!(box_plan.to_string().contains("radiosity: on (enclosed"), "{box_plan}");
+        for open in ["bunny-marble", "bunny", "materials", "opaque", "bunny-skin"] {
+            let p = Plan::of(&Scene::builtin(open).unwrap(), 640, 480);
+            assert!(!p.radiosity && p.to_string().contains("radiosity: off"), "{p}");
+        }
+        // An area light alone does not make an open scene enclosed: the bunny on its floor
+        // with the lamp of the box above it stays off, and the printout says why.
+        let cornell = include_str!("../../assets/scenes/cornell.json");
+        let mut file: crate::scene::SceneFile = serde_json::from_str(cornell).unwrap();
+        let floor = |o: &crate::scene::ObjectSpec| o.corners.is_some_and(|c| c.iter().all(|p| p[1] == 0.0));
+        file.objects.retain(|o| o.material == "marble" || o.material == "lamp" || floor(o));
+        assert_eq!(file.objects.len(), 3);
+        let open = Scene::from_json(&serde_json::to_string(&file).unwrap()).unwrap();
+        let p = Plan::of(&open, 640, 480);
+        assert!(!p.radiosity && p.to_string().contains("open scene"), "{p}");
     }
 
     #[test]
