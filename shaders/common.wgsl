@@ -48,7 +48,7 @@ const RUNG_BRUTE_FORCE: u32 = 4u;
 
 // One material, as the renderer uploads it (src/render/materials.rs).
 struct Material {
-    // 0 opaque, 1 translucent.
+    // 0 opaque, 1 translucent, 2 area light (albedo holds its exitance).
     kind: u32,
     // 1 when the scene plan gives this translucent material its subsurface rungs.
     subsurface: u32,
@@ -106,6 +106,8 @@ const MODE_WHITE_NOISE: u32 = 8u;
 const MODE_REPROJECTION: u32 = 16u;
 const MODE_SIBSON: u32 = 32u;
 const MODE_DOF: u32 = 64u;
+// Radiosity's direct light only (the interreflected part left out, for comparison).
+const MODE_DIRECT_ONLY: u32 = 128u;
 
 // Per-pixel state written by the sampling pass.
 const FLAG_COVERED: u32 = 1u;
@@ -160,12 +162,18 @@ struct VertexIn {
     @location(1) normal: vec3<f32>,
     @location(2) blurred_normal: vec3<f32>,
     @location(3) material: u32,
+    // Radiosity's irradiance at this vertex (src/render/pass/gbuffer.rs GI_LAYOUT): direct from
+    // area lights, and interreflected (with the preview of energy not yet shot). Zero in
+    // scenes without radiosity.
+    @location(4) gi_direct: vec4<f32>,
+    @location(5) gi_indirect: vec4<f32>,
 }
 
 // The light-space photon pass's uniforms (src/render/pass/photons.rs PhotonUniform).
 struct Photons {
     light_view_proj: mat4x4<f32>,
-    // xyz: unit vector towards the light.
+    // xyz: unit vector towards the light; w: 1 when photons carry radiosity's interreflected
+    // light as well as its direct light.
     to_light: vec4<f32>,
     // rgb: light colour × intensity.
     light: vec4<f32>,

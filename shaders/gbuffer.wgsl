@@ -9,6 +9,7 @@ struct VertexOut {
     @location(1) normal: vec3<f32>,
     @location(2) blurred_normal: vec3<f32>,
     @location(3) @interpolate(flat) material: u32,
+    @location(4) irradiance: vec3<f32>,
 }
 
 struct GBuffer {
@@ -19,6 +20,8 @@ struct GBuffer {
     // xyz: the normal blurred over the material's subsurface reach (not renormalised), as
     // n·0.5 + 0.5.
     @location(2) blurred_normal: vec4<f32>,
+    // rgb: radiosity's irradiance (zero without radiosity).
+    @location(3) irradiance: vec4<f32>,
 }
 
 @vertex
@@ -29,6 +32,10 @@ fn vs_main(v: VertexIn) -> VertexOut {
     out.normal = v.normal;
     out.blurred_normal = v.blurred_normal;
     out.material = v.material;
+    out.irradiance = v.gi_direct.rgb;
+    if (!has_mode(MODE_DIRECT_ONLY)) {
+        out.irradiance += v.gi_indirect.rgb;
+    }
     return out;
 }
 
@@ -42,6 +49,7 @@ fn fs_main(in: VertexOut) -> GBuffer {
     }
     g.normal_distance = vec4<f32>(n, distance(in.world, frame.eye.xyz));
     g.albedo = vec4<f32>(materials[in.material].albedo.rgb, f32(in.material + 1u) / 255.0);
+    g.irradiance = vec4<f32>(in.irradiance, 0.0);
     g.blurred_normal = vec4<f32>(clamp(in.blurred_normal, vec3<f32>(-1.0), vec3<f32>(1.0)) * 0.5 + 0.5, 0.0);
     return g;
 }

@@ -12,6 +12,7 @@ struct VertexOut {
     @location(0) world: vec3<f32>,
     @location(1) normal: vec3<f32>,
     @location(2) @interpolate(flat) material: u32,
+    @location(3) irradiance: vec3<f32>,
 }
 
 struct PhotonTexel {
@@ -19,6 +20,8 @@ struct PhotonTexel {
     @location(0) position: vec4<f32>,
     // xyz: surface normal; w: material id + 1.
     @location(1) normal: vec4<f32>,
+    // rgb: radiosity's irradiance where the photon enters.
+    @location(2) irradiance: vec4<f32>,
 }
 
 @vertex
@@ -28,6 +31,7 @@ fn vs_main(v: VertexIn) -> VertexOut {
     out.world = v.position;
     out.normal = v.normal;
     out.material = v.material;
+    out.irradiance = v.gi_direct.rgb + v.gi_indirect.rgb * photons.to_light.w;
     return out;
 }
 
@@ -39,5 +43,6 @@ fn fs_main(in: VertexOut) -> PhotonTexel {
     var t: PhotonTexel;
     t.position = vec4<f32>(in.world, 1.0);
     t.normal = vec4<f32>(normalize(in.normal), f32(in.material + 1u));
+    t.irradiance = vec4<f32>(in.irradiance, 0.0);
     return t;
 }

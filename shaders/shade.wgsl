@@ -23,6 +23,7 @@
 @group(0) @binding(8) var blurred_normal_tex: texture_2d<f32>;
 @group(0) @binding(9) var<storage, read> nodes: array<PhotonNode>;
 @group(0) @binding(10) var<storage, read> diffused: array<vec4<f32>>;
+@group(0) @binding(11) var irradiance_tex: texture_2d<f32>;
 
 // Index of the first node of pyramid level `level` (level 0: the photon map itself).
 fn level_offset(level: u32) -> u32 {
@@ -51,6 +52,16 @@ fn cluster_distance_mm(node: PhotonNode, x_o: vec3<f32>) -> f32 {
     return sqrt(r * r + soft * soft);
 }
 
+// A single photon's softening: its texel's footprint stretched by the surface's slant under
+// the light (CPU twin: optics::dipole::leaf_softening).
+fn leaf_distance_mm(node: PhotonNode, x_o: vec3<f32>) -> f32 {
+    let r = distance(node.pos_extent.xyz, x_o) * frame.photon.w;
+    let radius = frame.photon.y;
+    let extent_mm = node.pos_extent.w * frame.photon.w;
+    let soft = max(sqrt(radius * extent_mm / (0.70710678 * 1.77245385)), radius);
+    return sqrt(r * r + soft * soft);
+}
+
 // Σ R_d(|x_c − x_o|) Φ_c over every photon (eq. 8).
 fn gather_all(x_o: vec3<f32>, m: Material) -> vec3<f32> {
     let n = u32(frame.photon.x);
@@ -58,7 +69,7 @@ fn gather_all(x_o: vec3<f32>, m: Material) -> vec3<f32> {
     for (var i = 0u; i < n * n; i++) {
         let node = nodes[i];
         if (node.flux.w > 0.0) {
-            sum += dipole_rd(m, cluster_distance_mm(node, x_o)) * node.flux.rgb;
+            sum += dipole_rd(m, leaf_distance_mm(node, x_o)) * node.flux.rgb;
         }
     }
     return sum;
@@ -84,6 +95,10 @@ fn gather_cut(x_o: vec3<f32>, m: Material) -> vec3<f32> {
                 continue;
             }
             let d = distance(node.pos_extent.xyz, x_o);
+            if (level == 0u) {
+                sum += dipole_rd(m, leaf_distance_mm(node, x_o)) * node.flux.rgb;
+                continue;
+            }
             if (level <= cut_level || node.pos_extent.w < eps * d) {
                 sum += dipole_rd(m, cluster_distance_mm(node, x_o)) * node.flux.rgb;
                 continue;
@@ -116,17 +131,22 @@ fn shade(p: vec2<i32>) {
         if (m.subsurface == 0u || (rung >= RUNG_HIERARCHICAL && frame.cut.w < 0.5)) {
             rung = RUNG_OPAQUE;
         }
-        if (m.kind == 0u) {
-            rgb = lambert(nd.xyz, m.albedo.rgb);
+        // Radiosity's irradiance (direct from area lights + interreflected); zero without it.
+        let gi = textureLoad(irradiance_tex, p, 0).rgb;
+        if (m.kind == 2u) {
+            // An area light shows its own exitance.
+            rgb = m.albedo.rgb;
+        } else if (m.kind == 0u) {
+            rgb = lambert(nd.xyz, m.albedo.rgb) + m.albedo.rgb * gi;
         } else if (rung == RUNG_OPAQUE) {
-            rgb = m.albedo.rgb * frame.light.rgb * max(cos_i, 0.0) * fresnel_transmittance(m.eta, cos_i) * ft_out + ambient;
+            rgb = m.albedo.rgb * (frame.light.rgb * max(cos_i, 0.0) * fresnel_transmittance(m.eta, cos_i) + gi) * ft_out + ambient;
         } else if (rung == RUNG_NORMAL_BLUR) {
             let nb = textureLoad(blurred_normal_tex, p, 0).xyz * 2.0 - 1.0;
             let len = max(length(nb), 1e-6);
             let cos_b = dot(nb, l);
-            rgb = m.albedo.rgb * frame.light.rgb * max(cos_b, 0.0) * fresnel_transmittance(m.eta, cos_b / len) * ft_out + ambient;
+            rgb = m.albedo.rgb * (frame.light.rgb * max(cos_b, 0.0) * fresnel_transmittance(m.eta, cos_b / len) + gi) * ft_out + ambient;
         } else if (rung == RUNG_SCREEN) {
-            rgb = m.albedo.rgb * diffused[index_of(p)].rgb * ft_out + ambient;
+            rgb = m.albedo.rgb * (diffused[index_of(p)].rgb + gi) * ft_out + ambient;
         } else {
             let x_o = frame.eye.xyz + view_ray(vec2<f32>(p) + 0.5) * nd.w;
             var sum: vec3<f32>;

@@ -175,12 +175,16 @@ struct Knobs {
     /// none, samples or probability.
     #[arg(long, value_parser = parse_enum::<fovea::foveation::settings::Overlay>)]
     overlay: Option<fovea::foveation::settings::Overlay>,
+    /// In scenes with radiosity: add interreflected light (false: area lights' direct light only).
+    #[arg(long)]
+    indirect: Option<bool>,
 }
 
 impl Knobs {
     fn patch(&self) -> fovea::protocol::SettingsPatch {
         fovea::protocol::SettingsPatch {
             preset: None,
+            indirect: self.indirect,
             foveation: self.foveation,
             mar_slope: self.mar_slope,
             mar_w0_deg: self.mar_w0_deg,
@@ -361,6 +365,25 @@ fn render(request: FrameRequest, out: &std::path::Path, quality: u8, frames: u32
     };
     let mut renderer = Renderer::new().context("opening the GPU")?;
     eprintln!("adapter: {}", renderer.adapter());
+    // A still image shows the converged solution; the server streams the refining preview.
+    if let Some(solve) = renderer.radiosity(&request.scene)? {
+        eprintln!("radiosity: solving before rendering…");
+        let snap = solve
+            .wait(std::time::Duration::from_secs(3600))
+            .context("radiosity produced no result")?;
+        eprintln!(
+            "radiosity: {} in {:.1} s: {} shots, {} elements, {:.2}% of the emitted power unshot",
+            if snap.converged {
+                "converged"
+            } else {
+                "stopped waiting"
+            },
+            snap.elapsed_s,
+            snap.stats.shots,
+            snap.stats.elements,
+            100.0 * snap.stats.unshot_fraction
+        );
+    }
     let mut frame = renderer
         .render(&request)
         .with_context(|| format!("rendering scene {:?}", request.scene))?;

@@ -2,7 +2,7 @@
 //! force, energy bounded, the pyramid cached, and every rung composed with foveation.
 
 use fovea::foveation::{Rung, Settings};
-use fovea::optics::dipole::{fresnel_transmittance, softened_distance};
+use fovea::optics::dipole::{fresnel_transmittance, leaf_softening, softened_distance};
 use fovea::render::pass::photons::photon_radius_mm;
 use fovea::render::{FrameRequest, Inspection, Renderer};
 use fovea::scene::{Material, Scene};
@@ -75,7 +75,8 @@ fn brute_force_dipole_on_the_gpu_matches_the_cpu_sum() {
         for p in img.photons.iter().filter(|p| p[7] > 0.0) {
             let r_mm = f64::from(Vec3::new(p[0], p[1], p[2]).distance(x_o)) * mm;
             for c in 0..3 {
-                sum[c] += dipole[c].rd(softened_distance(r_mm, radius)) * f64::from(p[4 + c]);
+                let soft = leaf_softening(radius, f64::from(p[3]) * mm);
+                sum[c] += dipole[c].rd(softened_distance(r_mm, soft)) * f64::from(p[4 + c]);
             }
         }
         let ft = fresnel_transmittance(*eta, f64::from(Vec3::new(nd[0], nd[1], nd[2]).dot(-ray)));

@@ -164,6 +164,14 @@ pub struct Settings {
     pub prediction: bool,
     /// Prediction horizon in ms; 0 uses the session's measured gaze-to-frame latency.
     pub prediction_horizon_ms: f32,
+    /// In scenes with radiosity, add its interreflected light to the direct light (off: area
+    /// lights' direct light only, for comparison).
+    #[serde(default = "yes")]
+    pub indirect: bool,
+}
+
+fn yes() -> bool {
+    true
 }
 
 /// Named presets, cheapest last. `full` shades every pixel with the frame's shading; `reference`
@@ -216,6 +224,7 @@ impl Settings {
             overlay: Overlay::None,
             prediction: false,
             prediction_horizon_ms: 0.0,
+            indirect: true,
         })
     }
 }
@@ -287,6 +296,9 @@ impl Settings {
         }
         if let Some(v) = patch.overlay {
             self.overlay = v;
+        }
+        if let Some(v) = patch.indirect {
+            self.indirect = v;
         }
         if let Some(v) = patch.prediction {
             self.prediction = v;

@@ -152,6 +152,18 @@ pub fn softened_distance(r_mm: f64, radius_mm: f64) -> f64 {
     (r_mm * r_mm + radius_mm * radius_mm).sqrt()
 }
 
+/// The softening radius (mm) of one photon (a pyramid leaf). Its texel lands on a surface
+/// slanted under the light as an ellipse stretched by 1/cos; the disc of the same area has
+/// radius `radius_mm`/√cos. The leaf's extent, 0.7071·texel/cos (mm), carries the stretch, and
+/// texel = √π·`radius_mm`, so the radius is √(`radius_mm` · extent / (0.7071·√π)). Without it,
+/// light arriving from all around (radiosity) shows the photon rows on slanted surfaces.
+/// CPU twin of `leaf_softening` in `shaders/shade.wgsl`.
+pub fn leaf_softening(radius_mm: f64, extent_mm: f64) -> f64 {
+    (radius_mm * extent_mm / (std::f64::consts::FRAC_1_SQRT_2 * std::f64::consts::PI.sqrt()))
+        .sqrt()
+        .max(radius_mm)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

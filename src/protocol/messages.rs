@@ -126,6 +126,9 @@ pub struct Ack {
 pub struct SettingsPatch {
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub preset: Option<String>,
+    /// Radiosity's interreflected light on (default) or off.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub indirect: Option<bool>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub foveation: Option<bool>,
     #[serde(default, skip_serializing_if = "Option::is_none")]

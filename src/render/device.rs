@@ -52,7 +52,13 @@ impl Gpu {
             .request_device(&wgpu::DeviceDescriptor {
                 label: Some("fovea"),
                 required_features,
-                required_limits: wgpu::Limits::default(),
+                // The G-buffer writes four targets (normal + distance, albedo, blurred normal,
+                // radiosity irradiance): 40 bytes per pixel by WebGPU's accounting, over the
+                // default 32. Every desktop Vulkan, Metal and D3D12 adapter allows 64 or more.
+                required_limits: wgpu::Limits {
+                    max_color_attachment_bytes_per_sample: 40,
+                    ..wgpu::Limits::default()
+                },
                 ..Default::default()
             })
             .await

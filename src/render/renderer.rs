@@ -5,9 +5,9 @@ use glam::Vec3;
 
 use super::gpu::{self, FramePass};
 use super::pass::compact::CompactPass;
-use super::pass::gbuffer::{GBufferPass, GBufferTargets, MeshBuffers};
+use super::pass::gbuffer::{GBufferPass, GBufferTargets, GiVertex, MeshBuffers};
 use super::pass::jfa::JfaPass;
-use super::pass::photons::{PhotonMap, PhotonPass};
+use super::pass::photons::{PhotonInputs, PhotonMap, PhotonPass};
 use super::pass::screen_diffusion::ScreenDiffusionPass;
 use super::pass::shade::ShadePass;
 use super::pass::{dof, output, resolve, sampling};
@@ -87,6 +87,18 @@ pub struct RenderedFrame {
     pub readback_ms: f64,
     /// GPU milliseconds per pass label (empty without timestamp queries).
     pub passes_ms: std::collections::BTreeMap<String, f64>,
+    /// Where the scene's radiosity solve stood when this frame used it; `None` without one.
+    pub radiosity: Option<RadiosityState>,
+}
+
+/// The radiosity snapshot a frame was lit by.
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct RadiosityState {
+    pub shots: u32,
+    pub elements: usize,
+    /// Unshot power over emitted power (the ambient term previews it).
+    pub unshot: f64,
+    pub converged: bool,
 }
 
 /// Intermediate images of the last frame of a stream, for tests and diagnostics.
@@ -126,6 +138,10 @@ pub(crate) struct SceneGpu {
     pub photons: Option<PhotonMap>,
     /// Bound in place of the pyramid when the scene has none.
     pub no_photons: wgpu::Buffer,
+    /// The scene's radiosity solve, when its plan asks for one, and the snapshot uploaded.
+    pub radiosity: Option<crate::radiosity::RadiosityHandle>,
+    pub gi: Option<RadiosityState>,
+    pub gi_version: u64,
 }
 
 type TargetKey = (u64, String, u32, u32);
@@ -240,6 +256,7 @@ impl Renderer {
             mapped_at_creation: false,
         });
         tracing::info!(scene = %name, triangles = scene.mesh.triangle_count(), translucent = scene.has_translucency(), "scene loaded");
+        let radiosity = start_radiosity(&scene);
         self.scenes.insert(
             name,
             SceneGpu {
@@ -249,8 +266,20 @@ impl Renderer {
                 reach,
                 photons,
                 no_photons,
+                radiosity,
+                gi: None,
+                gi_version: 0,
             },
         );
+    }
+
+    /// The scene's radiosity solve (loading the scene if needed); `None` when its plan has none.
+    pub fn radiosity(
+        &mut self,
+        scene: &str,
+    ) -> Result<Option<crate::radiosity::RadiosityHandle>, RenderError> {
+        self.load_scene(scene)?;
+        Ok(self.scenes[scene].radiosity.clone())
     }
 
     /// How many times a photon pyramid has been built (static scenes: once per scene).
@@ -283,11 +312,18 @@ impl Renderer {
                 .unwrap_or_else(|| scene.file.light.to_light_at(req.time_s))
         };
         let sg = self.scenes.get_mut(&req.scene).expect("loaded above");
+        upload_radiosity(&self.gpu.queue, sg);
+        let photon_inputs = PhotonInputs {
+            to_light,
+            gi_version: sg.gi_version,
+            indirect: req.settings.indirect,
+        };
+        let radiosity = sg.gi;
         let mut photon_encoder = None;
         self.timer.begin_frame();
         if let Some(map) = sg.photons.as_mut() {
             let plan_needs = self.targets[ti].1.needs_dipole;
-            if rung >= Rung::Hierarchical && plan_needs && map.built_for != Some(to_light) {
+            if rung >= Rung::Hierarchical && plan_needs && map.built_for != Some(photon_inputs) {
                 let mut enc =
                     self.gpu
                         .device
@@ -300,7 +336,7 @@ impl Renderer {
                     map,
                     &sg.scene,
                     &sg.mesh,
-                    to_light,
+                    photon_inputs,
                     &mut self.timer,
                 );
                 self.pyramid_builds += 1;
@@ -312,7 +348,7 @@ impl Renderer {
         let pyramid_ready = sg
             .photons
             .as_ref()
-            .is_some_and(|m| m.built_for == Some(to_light));
+            .is_some_and(|m| m.built_for == Some(photon_inputs));
         let t = &self.targets[ti].1;
         let device = &self.gpu.device;
         let queue = &self.gpu.queue;
@@ -326,11 +362,12 @@ impl Renderer {
         let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
             label: Some("frame"),
         });
-        let (nd, albedo, blurred) = t.gbuffer_views();
+        let [nd, albedo, blurred, irradiance] = t.gbuffer_views();
         let targets = GBufferTargets {
             normal_distance: &nd,
             albedo: &albedo,
             blurred_normal: &blurred,
+            irradiance: &irradiance,
             depth: &t.depth,
         };
         let p = &self.passes;
@@ -418,6 +455,7 @@ impl Renderer {
             render_ms,
             readback_ms,
             passes_ms,
+            radiosity,
         })
     }
 
@@ -503,6 +541,61 @@ fn tile_offset(frame: u32) -> [u32; 2] {
     ]
 }
 
+/// Starts (or joins) the scene's radiosity solve when its plan asks for one.
+fn start_radiosity(scene: &Scene) -> Option<crate::radiosity::RadiosityHandle> {
+    if !Plan::of(scene, 1, 1).radiosity {
+        return None;
+    }
+    let options = crate::radiosity::Options {
+        stop_fraction: scene.file.radiosity.map_or(0.001, |r| r.stop_fraction),
+        ..Default::default()
+    };
+    match crate::radiosity::RadiosityHandle::start(
+        scene.name(),
+        scene.radiosity_surfaces(),
+        options,
+    ) {
+        Ok(h) => Some(h),
+        Err(e) => {
+            tracing::warn!(scene = scene.name(), error = %e, "radiosity unavailable; direct light only");
+            None
+        }
+    }
+}
+
+/// Uploads the solve's newest snapshot if it is newer than the one on the GPU.
+fn upload_radiosity(queue: &wgpu::Queue, sg: &mut SceneGpu) {
+    let Some(handle) = &sg.radiosity else { return };
+    if handle.version() <= sg.gi_version {
+        return;
+    }
+    let Some(snap) = handle.latest() else { return };
+    let data: Vec<GiVertex> = snap
+        .direct
+        .iter()
+        .zip(&snap.indirect)
+        .map(|(d, i)| GiVertex {
+            direct: *d,
+            indirect: *i,
+        })
+        .collect();
+    if data.len() == sg.scene.mesh.positions.len() {
+        queue.write_buffer(&sg.mesh.gi, 0, bytemuck::cast_slice(&data));
+    } else {
+        tracing::error!(
+            scene = sg.scene.name(),
+            "radiosity output does not match the mesh; ignored"
+        );
+    }
+    sg.gi_version = snap.version;
+    sg.gi = Some(RadiosityState {
+        shots: snap.stats.shots,
+        elements: snap.stats.elements,
+        unshot: snap.stats.unshot_fraction,
+        converged: snap.converged,
+    });
+}
+
 fn frame_uniform(
     scene: &Scene,
     camera: &Camera,
@@ -530,6 +623,7 @@ fn frame_uniform(
         (fov.reprojection, MODE_REPROJECTION),
         (fov.reconstruction == Reconstruction::Sibson, MODE_SIBSON),
         (s.dof, MODE_DOF),
+        (!s.indirect, MODE_DIRECT_ONLY),
     ] {
         if on {
             mode |= bit;

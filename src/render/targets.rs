@@ -21,6 +21,7 @@ pub struct FrameTargets {
     pub normal_distance: wgpu::Texture,
     pub albedo: wgpu::Texture,
     pub blurred_normal: wgpu::Texture,
+    pub irradiance: wgpu::Texture,
     pub history_normal_distance: wgpu::Texture,
     /// Per-pixel buffers, row-major.
     pub probability: wgpu::Buffer,
@@ -91,6 +92,7 @@ impl FrameTargets {
         let normal_distance = tex("gbuffer.normal_distance", gbuffer::NORMAL_DISTANCE, attach);
         let albedo = tex("gbuffer.albedo", gbuffer::ALBEDO, attach);
         let blurred_normal = tex("gbuffer.blurred_normal", gbuffer::BLURRED_NORMAL, attach);
+        let irradiance = tex("gbuffer.irradiance", gbuffer::IRRADIANCE, attach);
         let history_normal_distance = tex(
             "history.normal_distance",
             gbuffer::NORMAL_DISTANCE,
@@ -207,6 +209,7 @@ impl FrameTargets {
                 T(&blur),
                 b(nodes),
                 b(&diffused[0]),
+                T(&view(&irradiance)),
             ],
         );
         let diffusion = |src: &wgpu::Buffer, dst: &wgpu::Buffer| {
@@ -304,6 +307,7 @@ impl FrameTargets {
             normal_distance,
             albedo,
             blurred_normal,
+            irradiance,
             history_normal_distance,
             probability,
             flags,
@@ -350,12 +354,13 @@ impl FrameTargets {
         }
     }
 
-    pub fn gbuffer_views(&self) -> (wgpu::TextureView, wgpu::TextureView, wgpu::TextureView) {
-        (
+    pub fn gbuffer_views(&self) -> [wgpu::TextureView; 4] {
+        [
             view(&self.normal_distance),
             view(&self.albedo),
             view(&self.blurred_normal),
-        )
+            view(&self.irradiance),
+        ]
     }
 
     /// Encodes the copies that make this frame next frame's history.

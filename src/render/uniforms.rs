@@ -9,6 +9,7 @@ pub const MODE_WHITE_NOISE: u32 = 8;
 pub const MODE_REPROJECTION: u32 = 16;
 pub const MODE_SIBSON: u32 = 32;
 pub const MODE_DOF: u32 = 64;
+pub const MODE_DIRECT_ONLY: u32 = 128;
 
 pub const FLAG_COVERED: u32 = 1;
 pub const FLAG_SAMPLED: u32 = 2;

@@ -359,7 +359,8 @@ impl Scene {
                 vertex_count: part.positions.len() as u32,
                 first_index: mesh.indices.len() as u32,
                 index_count: part.indices.len() as u32,
-                quad: quad.map(|(c, cells, d)| (c.map(|p| transform.transform_point3(p)), cells, d)),
+                quad: quad
+                    .map(|(c, cells, d)| (c.map(|p| transform.transform_point3(p)), cells, d)),
             });
             mesh.append(part.with_blurred_normals(reach_units), material as u32);
         }
@@ -407,12 +408,21 @@ impl Scene {
                         emission: v3(m.emission()),
                     },
                     None => {
-                        let (v0, v1) = (p.first_vertex as usize, (p.first_vertex + p.vertex_count) as usize);
-                        let (i0, i1) = (p.first_index as usize, (p.first_index + p.index_count) as usize);
+                        let (v0, v1) = (
+                            p.first_vertex as usize,
+                            (p.first_vertex + p.vertex_count) as usize,
+                        );
+                        let (i0, i1) = (
+                            p.first_index as usize,
+                            (p.first_index + p.index_count) as usize,
+                        );
                         Surface::Mesh {
                             positions: self.mesh.positions[v0..v1].to_vec(),
                             normals: self.mesh.normals[v0..v1].to_vec(),
-                            indices: self.mesh.indices[i0..i1].iter().map(|i| i - p.first_vertex).collect(),
+                            indices: self.mesh.indices[i0..i1]
+                                .iter()
+                                .map(|i| i - p.first_vertex)
+                                .collect(),
                             reflectance: v3(m.albedo()),
                             triangles_per_patch: 16,
                         }
@@ -448,7 +458,8 @@ fn lattice_mesh(c: &[Vec3; 4], lattice: [u32; 2]) -> PlyMesh {
     for j in 0..=lv {
         for i in 0..=lu {
             positions.push(
-                c[0] + (c[1] - c[0]) * (i as f32 / lu as f32) + (c[3] - c[0]) * (j as f32 / lv as f32),
+                c[0] + (c[1] - c[0]) * (i as f32 / lu as f32)
+                    + (c[3] - c[0]) * (j as f32 / lv as f32),
             );
         }
     }

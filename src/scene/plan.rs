@@ -210,17 +210,25 @@ mod tests {
     fn radiosity_runs_in_the_enclosed_box_and_never_for_one_open_object() {
         let box_plan = Plan::of(&Scene::builtin("cornell").unwrap(), 640, 480);
         assert!(box_plan.radiosity, "{box_plan}");
-        assert!(box_plan.to_string().contains("radiosity: on (enclosed"), "{box_plan}");
+        assert!(
+            box_plan.to_string().contains("radiosity: on (enclosed"),
+            "{box_plan}"
+        );
         for open in ["bunny-marble", "bunny", "materials", "opaque", "bunny-skin"] {
             let p = Plan::of(&Scene::builtin(open).unwrap(), 640, 480);
-            assert!(!p.radiosity && p.to_string().contains("radiosity: off"), "{p}");
+            assert!(
+                !p.radiosity && p.to_string().contains("radiosity: off"),
+                "{p}"
+            );
         }
         // An area light alone does not make an open scene enclosed: the bunny on its floor
         // with the lamp of the box above it stays off, and the printout says why.
         let cornell = include_str!("../../assets/scenes/cornell.json");
         let mut file: crate::scene::SceneFile = serde_json::from_str(cornell).unwrap();
-        let floor = |o: &crate::scene::ObjectSpec| o.corners.is_some_and(|c| c.iter().all(|p| p[1] == 0.0));
-        file.objects.retain(|o| o.material == "marble" || o.material == "lamp" || floor(o));
+        let floor =
+            |o: &crate::scene::ObjectSpec| o.corners.is_some_and(|c| c.iter().all(|p| p[1] == 0.0));
+        file.objects
+            .retain(|o| o.material == "marble" || o.material == "lamp" || floor(o));
         assert_eq!(file.objects.len(), 3);
         let open = Scene::from_json(&serde_json::to_string(&file).unwrap()).unwrap();
         let p = Plan::of(&open, 640, 480);

@@ -15,6 +15,23 @@ pub const ALBEDO: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8Unorm;
 /// Stored as n·0.5 + 0.5 (signed normalised formats are not renderable in WebGPU).
 pub const BLURRED_NORMAL: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8Unorm;
 pub const DEPTH: wgpu::TextureFormat = wgpu::TextureFormat::Depth32Float;
+/// Radiosity's irradiance per pixel.
+pub const IRRADIANCE: wgpu::TextureFormat = wgpu::TextureFormat::Rgba16Float;
+
+/// Radiosity's per-vertex irradiance, a second vertex buffer: it changes as the solve refines
+/// while the geometry stays put.
+#[repr(C)]
+#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
+pub struct GiVertex {
+    pub direct: [f32; 4],
+    pub indirect: [f32; 4],
+}
+
+pub const GI_LAYOUT: wgpu::VertexBufferLayout<'static> = wgpu::VertexBufferLayout {
+    array_stride: std::mem::size_of::<GiVertex>() as u64,
+    step_mode: wgpu::VertexStepMode::Vertex,
+    attributes: &wgpu::vertex_attr_array![4 => Float32x4, 5 => Float32x4],
+};
 
 #[repr(C)]
 #[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
@@ -37,6 +54,8 @@ pub struct MeshBuffers {
     pub vertices: wgpu::Buffer,
     pub indices: wgpu::Buffer,
     pub index_count: u32,
+    /// `GiVertex` per vertex; zeros until (and unless) radiosity writes it.
+    pub gi: wgpu::Buffer,
 }
 
 pub struct GBufferPass {
@@ -49,6 +68,7 @@ pub struct GBufferTargets<'a> {
     pub normal_distance: &'a wgpu::TextureView,
     pub albedo: &'a wgpu::TextureView,
     pub blurred_normal: &'a wgpu::TextureView,
+    pub irradiance: &'a wgpu::TextureView,
     pub depth: &'a wgpu::TextureView,
 }
 
@@ -73,7 +93,7 @@ impl GBufferPass {
                 module: &module,
                 entry_point: Some("vs_main"),
                 compilation_options: Default::default(),
-                buffers: &[Some(VERTEX_LAYOUT)],
+                buffers: &[Some(VERTEX_LAYOUT), Some(GI_LAYOUT)],
             },
             primitive: wgpu::PrimitiveState {
                 cull_mode: Some(wgpu::Face::Back),
@@ -95,6 +115,7 @@ impl GBufferPass {
                     target(NORMAL_DISTANCE),
                     target(ALBEDO),
                     target(BLURRED_NORMAL),
+                    target(IRRADIANCE),
                 ],
             }),
             multiview_mask: None,
@@ -124,10 +145,19 @@ impl GBufferPass {
             contents: bytemuck::cast_slice(&mesh.indices),
             usage: wgpu::BufferUsages::INDEX,
         });
+        let gi = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("gi"),
+            contents: bytemuck::cast_slice(&vec![
+                <GiVertex as bytemuck::Zeroable>::zeroed();
+                mesh.positions.len().max(1)
+            ]),
+            usage: wgpu::BufferUsages::VERTEX | wgpu::BufferUsages::COPY_DST,
+        });
         MeshBuffers {
             vertices,
             indices,
             index_count: mesh.indices.len() as u32,
+            gi,
         }
     }
 
@@ -165,6 +195,7 @@ impl GBufferPass {
                 ),
                 clear(targets.albedo, wgpu::Color::TRANSPARENT),
                 clear(targets.blurred_normal, wgpu::Color::TRANSPARENT),
+                clear(targets.irradiance, wgpu::Color::TRANSPARENT),
             ],
             depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
                 view: targets.depth,
@@ -181,6 +212,7 @@ impl GBufferPass {
         pass.set_pipeline(&self.pipeline);
         pass.set_bind_group(0, bind_group, &[]);
         pass.set_vertex_buffer(0, mesh.vertices.slice(..));
+        pass.set_vertex_buffer(1, mesh.gi.slice(..));
         pass.set_index_buffer(mesh.indices.slice(..), wgpu::IndexFormat::Uint32);
         pass.draw_indexed(0..mesh.index_count, 0, 0..1);
     }

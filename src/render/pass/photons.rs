@@ -5,7 +5,7 @@
 use glam::{Mat4, Vec3};
 
 use crate::render::gpu::{self, FLOAT};
-use crate::render::pass::gbuffer::{MeshBuffers, VERTEX_LAYOUT};
+use crate::render::pass::gbuffer::{MeshBuffers, GI_LAYOUT, IRRADIANCE, VERTEX_LAYOUT};
 use crate::render::timer::PassTimer;
 use crate::scene::Scene;
 
@@ -53,11 +53,21 @@ pub struct PhotonMap {
     levels: wgpu::Buffer,
     position: wgpu::TextureView,
     normal: wgpu::TextureView,
+    irradiance: wgpu::TextureView,
     depth: wgpu::TextureView,
     raster_bind: wgpu::BindGroup,
     pyramid_bind: wgpu::BindGroup,
-    /// The light direction it was built for.
-    pub built_for: Option<Vec3>,
+    /// What it was built for.
+    pub built_for: Option<PhotonInputs>,
+}
+
+/// What a photon map depends on besides the scene: the light's direction and radiosity's
+/// irradiance (which snapshot, and whether its interreflected part is included).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct PhotonInputs {
+    pub to_light: Vec3,
+    pub gi_version: u64,
+    pub indirect: bool,
 }
 
 impl PhotonPass {
@@ -80,7 +90,7 @@ impl PhotonPass {
                 module: &module,
                 entry_point: Some("vs_main"),
                 compilation_options: Default::default(),
-                buffers: &[Some(VERTEX_LAYOUT)],
+                buffers: &[Some(VERTEX_LAYOUT), Some(GI_LAYOUT)],
             },
             // Both faces: the light may see an object's inside through an open mesh.
             primitive: wgpu::PrimitiveState {
@@ -102,6 +112,7 @@ impl PhotonPass {
                 targets: &[
                     target(wgpu::TextureFormat::Rgba32Float),
                     target(wgpu::TextureFormat::Rgba32Float),
+                    target(IRRADIANCE),
                 ],
             }),
             multiview_mask: None,
@@ -117,6 +128,7 @@ impl PhotonPass {
                 gpu::texture(4, FLOAT),
                 gpu::texture(5, FLOAT),
                 gpu::storage_buffer(6, false),
+                gpu::texture(7, FLOAT),
             ],
         });
         let leaves = gpu::compute_pipeline(
@@ -157,6 +169,7 @@ impl PhotonPass {
             wgpu::TextureFormat::Rgba32Float,
             usage,
         ));
+        let irradiance = gpu::view(&tex("photons.irradiance", IRRADIANCE, usage));
         let depth = gpu::view(&tex(
             "photons.depth",
             wgpu::TextureFormat::Depth32Float,
@@ -207,6 +220,7 @@ impl PhotonPass {
                 (4, wgpu::BindingResource::TextureView(&position)),
                 (5, wgpu::BindingResource::TextureView(&normal)),
                 (6, nodes.as_entire_binding()),
+                (7, wgpu::BindingResource::TextureView(&irradiance)),
             ],
         );
         PhotonMap {
@@ -215,6 +229,7 @@ impl PhotonPass {
             levels,
             position,
             normal,
+            irradiance,
             depth,
             raster_bind,
             pyramid_bind,
@@ -231,9 +246,10 @@ impl PhotonPass {
         map: &mut PhotonMap,
         scene: &Scene,
         mesh: &MeshBuffers,
-        to_light: Vec3,
+        inputs: PhotonInputs,
         timer: &mut PassTimer,
     ) {
+        let to_light = inputs.to_light;
         // An orthographic light camera around the translucent objects' bounding sphere.
         let (centre, radius) = translucent_bounds(scene);
         let up = if to_light.cross(Vec3::Y).length() < 1e-3 {
@@ -249,7 +265,9 @@ impl PhotonPass {
         let light = scene.file.light;
         let u = PhotonUniform {
             light_view_proj: (proj * view).to_cols_array_2d(),
-            to_light: to_light.extend(0.0).to_array(),
+            to_light: to_light
+                .extend(f32::from(u8::from(inputs.indirect)))
+                .to_array(),
             light: (Vec3::from(light.color) * light.intensity)
                 .extend(0.0)
                 .to_array(),
@@ -282,7 +300,11 @@ impl PhotonPass {
             };
             let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
                 label: Some(LABEL),
-                color_attachments: &[attach(&map.position), attach(&map.normal)],
+                color_attachments: &[
+                    attach(&map.position),
+                    attach(&map.normal),
+                    attach(&map.irradiance),
+                ],
                 depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
                     view: &map.depth,
                     depth_ops: Some(wgpu::Operations {
@@ -298,6 +320,7 @@ impl PhotonPass {
             pass.set_pipeline(&self.raster);
             pass.set_bind_group(0, &map.raster_bind, &[]);
             pass.set_vertex_buffer(0, mesh.vertices.slice(..));
+            pass.set_vertex_buffer(1, mesh.gi.slice(..));
             pass.set_index_buffer(mesh.indices.slice(..), wgpu::IndexFormat::Uint32);
             pass.draw_indexed(0..mesh.index_count, 0, 0..1);
         }
@@ -311,7 +334,7 @@ impl PhotonPass {
             pass.set_bind_group(0, &map.pyramid_bind, &[(SLOT * u64::from(l)) as u32]);
             pass.dispatch_workgroups(side.div_ceil(8), side.div_ceil(8), 1);
         }
-        map.built_for = Some(to_light);
+        map.built_for = Some(inputs);
     }
 }
 

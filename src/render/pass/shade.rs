@@ -31,6 +31,7 @@ impl ShadePass {
                 gpu::texture(8, FLOAT),
                 gpu::storage_buffer(9, true),
                 gpu::storage_buffer(10, true),
+                gpu::texture(11, FLOAT),
             ],
         );
         let list = gpu::compute_pipeline(device, "shade.list", &module, "shade_list", &layout);
