@@ -273,3 +273,48 @@ fn a_scene_without_an_emitter_or_with_a_bad_quad_is_refused() {
         Some(RadiosityError::BadQuad(0))
     );
 }
+
+#[test]
+fn the_ambient_preview_lights_the_scene_before_any_shot_and_fades_as_it_converges() {
+    let mut solver = Solver::new(&closed_cube(6, 1, 0.7, 1.0), serial()).unwrap();
+    let mean = |v: &[Vec3]| v.iter().map(|e| e.x).sum::<f32>() / v.len() as f32;
+    let (_, preview) = solver.irradiance(true);
+    let ambient0 = solver.ambient().x;
+    assert!(ambient0 > 0.0 && mean(&preview) > 0.0);
+    while !solver.converged() && solver.step().is_some() {}
+    let ambient1 = solver.ambient().x;
+    assert!(ambient1 < 0.01 * ambient0, "{ambient0} → {ambient1}");
+    // Before a single shot the preview already shows the right overall brightness: within
+    // 20% of the converged mean irradiance (direct + indirect) of the room.
+    let (direct, indirect) = solver.irradiance(true);
+    let converged = mean(&direct) + mean(&indirect);
+    assert!(
+        (mean(&preview) - converged).abs() < 0.2 * converged,
+        "preview {} vs converged {converged}",
+        mean(&preview)
+    );
+}
+
+#[test]
+fn one_solve_is_shared_publishes_monotone_snapshots_and_converges() {
+    use fovea::radiosity::RadiosityHandle;
+    let surfaces = closed_cube(5, 1, 0.6, 1.0);
+    let a = RadiosityHandle::start("cube", surfaces.clone(), Options::default()).unwrap();
+    let b = RadiosityHandle::start("cube", surfaces, Options::default()).unwrap();
+    assert!(a.same_solve(&b), "same geometry and lights: one solve");
+    let last = a
+        .wait(std::time::Duration::from_secs(120))
+        .expect("a snapshot");
+    assert!(
+        last.converged && last.stats.unshot_fraction < 0.001,
+        "{:?}",
+        last.stats
+    );
+    let history = a.history();
+    assert!(history
+        .windows(2)
+        .all(|w| w[1].1.unshot_fraction <= w[0].1.unshot_fraction + 1e-9));
+    let other =
+        RadiosityHandle::start("cube", closed_cube(5, 1, 0.5, 1.0), Options::default()).unwrap();
+    assert!(!other.same_solve(&a), "different reflectance: a new solve");
+}

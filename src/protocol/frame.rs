@@ -47,6 +47,10 @@ pub struct FrameHeader {
     /// GPU milliseconds per render pass, where the adapter has timestamp queries.
     #[serde(default, skip_serializing_if = "std::collections::BTreeMap::is_empty")]
     pub passes_ms: std::collections::BTreeMap<String, f64>,
+    /// In scenes with radiosity: the snapshot of the solve this frame was lit by. Until it
+    /// converges the frame shows the preview (unshot energy spread as an ambient term).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub radiosity: Option<crate::radiosity::Progress>,
 }
 
 /// Packs `[u32 LE header length][JSON header][image bytes]`.
@@ -111,6 +115,12 @@ mod tests {
                 encode: 1.25,
             },
             passes_ms: [("shade".to_string(), 0.75)].into_iter().collect(),
+            radiosity: Some(crate::radiosity::Progress {
+                shots: 120,
+                elements: 5000,
+                unshot: 0.25,
+                converged: false,
+            }),
         };
         let image = [0xFFu8, 0xD8, 0x01, 0x02];
         let bytes = encode_frame(&header, &image);

@@ -29,6 +29,27 @@ pub struct Snapshot {
     pub converged: bool,
 }
 
+/// The radiosity snapshot a frame was lit by (sent in frame headers).
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct Progress {
+    pub shots: u32,
+    pub elements: usize,
+    /// Unshot power over emitted power (the ambient term previews it).
+    pub unshot: f64,
+    pub converged: bool,
+}
+
+impl Snapshot {
+    pub fn progress(&self) -> Progress {
+        Progress {
+            shots: self.stats.shots,
+            elements: self.stats.elements,
+            unshot: self.stats.unshot_fraction,
+            converged: self.converged,
+        }
+    }
+}
+
 struct Shared {
     scene: String,
     latest: Mutex<Option<Arc<Snapshot>>>,
@@ -141,6 +162,11 @@ impl RadiosityHandle {
             .lock()
             .unwrap_or_else(|p| p.into_inner())
             .clone()
+    }
+
+    /// Whether two handles share one solve.
+    pub fn same_solve(&self, other: &RadiosityHandle) -> bool {
+        Arc::ptr_eq(&self.shared, &other.shared)
     }
 
     /// Every solve still in use in this process: for readiness and metrics.

@@ -20,7 +20,7 @@ pub mod cache;
 pub mod form_factor;
 mod solver;
 
-pub use cache::{RadiosityHandle, Snapshot};
+pub use cache::{Progress, RadiosityHandle, Snapshot};
 pub use solver::{Shot, Solver, Stats};
 
 use glam::Vec3;

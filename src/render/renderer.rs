@@ -21,6 +21,7 @@ use crate::foveation::{Noise, Reconstruction, Rung, Settings};
 use crate::optics::acuity::{mar_deg, ProbabilityForm, Viewing};
 use crate::optics::color::srgb8_to_linear;
 use crate::protocol::Display;
+use crate::radiosity::Progress;
 use crate::scene::{Camera, Plan, Scene};
 
 /// Largest side a frame may have; matches wgpu's default 2-D texture limit.
@@ -88,17 +89,7 @@ pub struct RenderedFrame {
     /// GPU milliseconds per pass label (empty without timestamp queries).
     pub passes_ms: std::collections::BTreeMap<String, f64>,
     /// Where the scene's radiosity solve stood when this frame used it; `None` without one.
-    pub radiosity: Option<RadiosityState>,
-}
-
-/// The radiosity snapshot a frame was lit by.
-#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
-pub struct RadiosityState {
-    pub shots: u32,
-    pub elements: usize,
-    /// Unshot power over emitted power (the ambient term previews it).
-    pub unshot: f64,
-    pub converged: bool,
+    pub radiosity: Option<Progress>,
 }
 
 /// Intermediate images of the last frame of a stream, for tests and diagnostics.
@@ -140,7 +131,7 @@ pub(crate) struct SceneGpu {
     pub no_photons: wgpu::Buffer,
     /// The scene's radiosity solve, when its plan asks for one, and the snapshot uploaded.
     pub radiosity: Option<crate::radiosity::RadiosityHandle>,
-    pub gi: Option<RadiosityState>,
+    pub gi: Option<Progress>,
     pub gi_version: u64,
 }
 
@@ -588,12 +579,7 @@ fn upload_radiosity(queue: &wgpu::Queue, sg: &mut SceneGpu) {
         );
     }
     sg.gi_version = snap.version;
-    sg.gi = Some(RadiosityState {
-        shots: snap.stats.shots,
-        elements: snap.stats.elements,
-        unshot: snap.stats.unshot_fraction,
-        converged: snap.converged,
-    });
+    sg.gi = Some(snap.progress());
 }
 
 fn frame_uniform(

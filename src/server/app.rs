@@ -20,9 +20,23 @@ pub fn router(state: Arc<ServerState>) -> Router {
 }
 
 /// Ready while a session slot is free: load balancers send new viewers elsewhere otherwise.
+/// Radiosity solves still refining are listed but do not make the server unready: sessions
+/// start on the preview and see it improve.
 async fn readyz(State(state): State<Arc<ServerState>>) -> Response {
     if state.slots.available_permits() > 0 {
-        (StatusCode::OK, "ready\n").into_response()
+        let mut body = String::from("ready\n");
+        for solve in crate::radiosity::RadiosityHandle::all() {
+            if let Some(p) = solve.latest().map(|s| s.progress()) {
+                body.push_str(&format!(
+                    "radiosity {}: {} ({} shots, {:.2}% of the emitted power unshot)\n",
+                    solve.scene(),
+                    if p.converged { "converged" } else { "refining" },
+                    p.shots,
+                    100.0 * p.unshot
+                ));
+            }
+        }
+        (StatusCode::OK, body).into_response()
     } else {
         (
             StatusCode::SERVICE_UNAVAILABLE,

@@ -416,6 +416,7 @@ async fn make_frame(
     let (w, h) = (frame.width, frame.height);
     let (render_ms, readback_ms, sampled) = (frame.render_ms, frame.readback_ms, frame.sampled);
     let passes_ms = frame.passes_ms;
+    let radiosity = frame.radiosity;
     let rgba = frame.rgba;
     let frame_no = job.frame;
     let encoded = tokio::task::spawn_blocking(move || {
@@ -455,6 +456,7 @@ async fn make_frame(
             encode: encode_time.as_secs_f64() * 1e3,
         },
         passes_ms,
+        radiosity,
     };
     Ok((encode_frame(&header, &image), job.arrived))
 }

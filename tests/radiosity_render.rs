@@ -1,0 +1,118 @@
+//! Radiosity in the frame (GPU, software adapter): the cornell box's walls light each other and
+//! the translucent bunny, the solve is shared by every renderer, and open scenes never run it.
+
+use std::time::Duration;
+
+use fovea::foveation::Settings;
+use fovea::render::{FrameRequest, Inspection, Renderer};
+
+fn renderer() -> Renderer {
+    Renderer::new().unwrap_or_else(|e| panic!("GPU tests need an adapter: {e}"))
+}
+
+const W: u32 = 160;
+const H: u32 = 120;
+
+fn frame(
+    r: &mut Renderer,
+    indirect: bool,
+    stream: u64,
+) -> (Inspection, fovea::render::RenderedFrame) {
+    let mut req = FrameRequest::new("cornell", W, H);
+    req.settings = Settings::preset("full").unwrap();
+    req.settings.indirect = indirect;
+    req.stream = stream;
+    req.marker = false;
+    let f = r.render(&req).unwrap();
+    (r.inspect(stream, "cornell", W, H).unwrap(), f)
+}
+
+/// Mean linear colour of the pixels whose normal passes `keep` and whose column is in `cols`.
+fn mean(img: &Inspection, keep: impl Fn([f32; 3]) -> bool, cols: std::ops::Range<u32>) -> [f64; 3] {
+    let (mut sum, mut n) = ([0.0f64; 3], 0.0);
+    for (k, nd) in img.normal_distance.iter().enumerate() {
+        let x = k as u32 % W;
+        let c = img.color[k];
+        // Lamp pixels show its exitance (≫ 1): not a surface lit by anything.
+        if nd[3] > 0.0 && cols.contains(&x) && keep([nd[0], nd[1], nd[2]]) && c[0] < 5.0 {
+            for i in 0..3 {
+                sum[i] += f64::from(c[i]);
+            }
+            n += 1.0;
+        }
+    }
+    assert!(n > 10.0, "too few pixels selected ({n})");
+    sum.map(|s| s / n)
+}
+
+fn ceiling(n: [f32; 3]) -> bool {
+    n[1] < -0.99
+}
+fn floor(n: [f32; 3]) -> bool {
+    n[1] > 0.99
+}
+/// The bunny: no wall has a slanted normal.
+fn bunny(n: [f32; 3]) -> bool {
+    n.iter().all(|c| c.abs() < 0.99)
+}
+
+#[test]
+fn the_walls_light_the_room_and_the_bunny_once_radiosity_converges() {
+    let mut r = renderer();
+    let solve = r
+        .radiosity("cornell")
+        .unwrap()
+        .expect("the plan runs radiosity for cornell");
+    let snap = solve.wait(Duration::from_secs(600)).expect("a snapshot");
+    assert!(snap.converged, "{:?}", snap.stats);
+    let (gi, f) = frame(&mut r, true, 1);
+    let (direct, _) = frame(&mut r, false, 2);
+    let progress = f.radiosity.expect("frames say which solve lit them");
+    assert!(
+        progress.converged && progress.unshot < 0.001,
+        "{progress:?}"
+    );
+
+    // The ceiling faces away from the lamp beside it: only interreflected light reaches it.
+    let all = 0..W;
+    assert!(mean(&direct, ceiling, all.clone())[1] < 1e-3);
+    assert!(mean(&gi, ceiling, all.clone())[1] > 0.05);
+    // Colour bleeding: the floor by the red wall is redder than by the green one, which it is
+    // not under the lamp's direct light alone.
+    let ratio = |c: [f64; 3]| c[0] / c[1];
+    let (left, right) = (0..W / 3, 2 * W / 3..W);
+    let bleed = ratio(mean(&gi, floor, left.clone())) / ratio(mean(&gi, floor, right.clone()));
+    let plain = ratio(mean(&direct, floor, left)) / ratio(mean(&direct, floor, right));
+    assert!(
+        bleed > 1.1 && (plain - 1.0).abs() < 0.01,
+        "bleed {bleed}, direct only {plain}"
+    );
+    // The translucent bunny gets the walls' light through its photons: brighter, and its side
+    // facing the red wall redder than its side facing the green one.
+    let lit = mean(&gi, bunny, all.clone());
+    let unlit = mean(&direct, bunny, all);
+    assert!(
+        lit[1] > 1.5 * unlit[1],
+        "bunny {lit:?} vs direct only {unlit:?}"
+    );
+    let facing_red = mean(&gi, |n| bunny(n) && n[0] < -0.5, 0..W);
+    let facing_green = mean(&gi, |n| bunny(n) && n[0] > 0.5, 0..W);
+    assert!(
+        ratio(facing_red) > 1.5 * ratio(facing_green),
+        "{facing_red:?} vs {facing_green:?}"
+    );
+}
+
+#[test]
+fn renderers_share_one_solve_and_open_scenes_have_none() {
+    let (mut a, mut b) = (renderer(), renderer());
+    let sa = a.radiosity("cornell").unwrap().unwrap();
+    let sb = b.radiosity("cornell").unwrap().unwrap();
+    assert!(sa.same_solve(&sb));
+    for open in ["bunny-marble", "materials", "opaque"] {
+        assert!(a.radiosity(open).unwrap().is_none(), "{open}");
+    }
+    let mut req = FrameRequest::new("bunny-marble", 32, 24);
+    req.settings = Settings::preset("fast").unwrap();
+    assert!(a.render(&req).unwrap().radiosity.is_none());
+}
