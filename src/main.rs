@@ -17,6 +17,7 @@ use cli::bench::{bench, BenchArgs};
 use cli::gaze::{gaze, replay, GazeArgs, ReplayArgs};
 use cli::load::{load, LoadArgs};
 use cli::parse::{parse_enum, parse_gaze, parse_vec3};
+use cli::radiosity::{radiosity, RadiosityArgs};
 
 #[derive(Parser)]
 #[command(
@@ -121,6 +122,11 @@ enum Command {
     /// stage times as HDR percentiles, fps per session and in total, fairness, errors and
     /// refusals; writes DIR/load.json and DIR/load.svg. Loopback targets only.
     Load(LoadArgs),
+    /// Solve a scene's radiosity in the foreground and report its convergence (elements,
+    /// shots, time to 90% and 99% of the converged energy), then the frame time with the cached
+    /// result against direct light only and radiosity off; writes DIR/radiosity.json, .md and
+    /// the direct / with-radiosity images.
+    Radiosity(RadiosityArgs),
 }
 
 /// Single-knob overrides, the same names as the protocol's `settings` message.
@@ -237,6 +243,7 @@ fn main() -> Result<()> {
         Command::Replay(args) => replay(args),
         Command::Gaze(args) => gaze(args),
         Command::Load(args) => load(args),
+        Command::Radiosity(args) => radiosity(args),
         Command::Render {
             scene,
             width,

@@ -4,3 +4,4 @@ pub mod bench;
 pub mod gaze;
 pub mod load;
 pub mod parse;
+pub mod radiosity;

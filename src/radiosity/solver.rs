@@ -20,6 +20,12 @@ struct Vertex {
     direct: Vec3,
     /// Index into the output (the display mesh's vertex); `NO_OUTPUT` for an element's centre.
     out: usize,
+    /// Where it is evaluated and its shadow rays start: off the surface along the normal and,
+    /// on a quad's edge, a hair into the quad. Exactly on the seam where two walls meet, the
+    /// other wall is seen edge-on (factor 0, and rays run inside its plane), while a hair
+    /// inside it fills half the hemisphere: the seam's vertices would darken the whole row of
+    /// elements along it.
+    origin: Vec3,
 }
 
 /// Elements closer to the shooter than this many areas (r² < k · A) average a grid of
@@ -360,12 +366,8 @@ impl Solver {
         let verts = &self.vertices[range];
         let chunk = verts.len().div_ceil(threads).max(64);
         let one = |v: &Vertex| {
-            let f = point_to_patch(v.pos, v.normal, &patch.facets);
-            if f > 0.0
-                && self
-                    .bvh
-                    .occluded(v.pos + v.normal * self.margin, patch.target, self.margin)
-            {
+            let f = point_to_patch(v.origin, v.normal, &patch.facets);
+            if f > 0.0 && self.bvh.occluded(v.origin, patch.target, self.margin) {
                 0.0
             } else {
                 f

@@ -102,12 +102,14 @@ impl Solver {
         }
         let first = self.vertices.len() as u32;
         for (k, (p, n)) in positions.iter().zip(normals).enumerate() {
+            let normal = n.try_normalize().unwrap_or(Vec3::Y);
             self.vertices.push(Vertex {
                 pos: *p,
-                normal: n.try_normalize().unwrap_or(Vec3::Y),
+                normal,
                 total: Vec3::ZERO,
                 direct: Vec3::ZERO,
                 out: self.outputs + k,
+                origin: *p + normal * self.margin,
             });
         }
         // Neighbouring triangles shoot together: sort by a Morton code of the centroid.
@@ -212,6 +214,7 @@ impl Solver {
             total: Vec3::ZERO,
             direct: Vec3::ZERO,
             out: NO_OUTPUT,
+            origin: pos + normal * self.margin,
         });
         (self.vertices.len() - 1) as u32
     }
@@ -242,12 +245,15 @@ impl Solver {
         let q = &self.quads[&surface];
         let out = q.first_out + (j * (q.lattice[0] + 1) + i) as usize;
         let id = self.vertices.len() as u32;
+        let [c0, _, c2, _] = q.corners;
+        let inward = ((c0 + c2) / 2.0 - pos).normalize_or_zero();
         self.vertices.push(Vertex {
             pos,
             normal: q.normal,
             total,
             direct,
             out,
+            origin: pos + (q.normal + inward * 2.0) * self.margin,
         });
         if let Some(q) = self.quads.get_mut(&surface) {
             q.points.insert((i, j), id);
