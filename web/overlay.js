@@ -39,6 +39,12 @@ export function overlayText(stats, header, nowMs) {
     lines.push(`server queue ${ms(s.queue)} render ${ms(s.render)} readback ${ms(s.readback)} encode ${ms(s.encode)}`);
     lines.push(`frame ${header.frame}  ${header.width}×${header.height} ${header.codec}  shaded ${(100 * header.sampled).toFixed(1)}%`);
     lines.push(`gaze ${header.gaze.x.toFixed(3)}, ${header.gaze.y.toFixed(3)}`);
+    const gi = header.radiosity;
+    if (gi) {
+      // The scene's radiosity solve: the preview sharpens until it converges.
+      const state = gi.converged ? 'converged' : 'refining';
+      lines.push(`radiosity ${state}: ${gi.shots} shots, ${gi.elements} elements, ${(100 * gi.unshot).toFixed(2)}% unshot`);
+    }
   }
   return lines.join('\n');
 }

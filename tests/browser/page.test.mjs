@@ -154,3 +154,27 @@ test('auto gaze drives the frames with the synthetic eye', async () => {
   assert.deepEqual(await page.evaluate(() => window.fovea.errors), []);
   await page.close();
 });
+
+test('the cornell scene streams its radiosity preview and it converges', async () => {
+  const page = await browser.newPage({ viewport: { width: 900, height: 700 } });
+  const consoleErrors = [];
+  page.on('console', (m) => { if (m.type() === 'error') consoleErrors.push(m.text()); });
+  await page.goto(`${baseUrl}/`);
+  await page.waitForFunction(() => window.fovea && window.fovea.framesShown >= 1, null, { timeout: 30_000 });
+  await page.selectOption('#scene', 'cornell');
+  await page.check('#auto-gaze');
+  // The solve starts when the scene loads; frames come at once, lit by the preview.
+  const first = await page.waitForFunction(() => window.fovea.lastHeader?.radiosity, null, { timeout: 60_000 });
+  const early = await first.jsonValue();
+  const done = await page.waitForFunction(() => window.fovea.lastHeader?.radiosity?.converged && window.fovea.lastHeader.radiosity,
+    null, { timeout: 180_000, polling: 250 });
+  const late = await done.jsonValue();
+  assert.ok(late.unshot < 0.001 && late.unshot < early.unshot, `unshot ${early.unshot} → ${late.unshot}`);
+  await page.waitForFunction(() => /radiosity converged: \d+ shots/.test(document.getElementById('overlay').textContent),
+    null, { timeout: 10_000 });
+  mkdirSync(artifacts, { recursive: true });
+  await page.screenshot({ path: join(artifacts, 'cornell.png') });
+  assert.deepEqual(consoleErrors, []);
+  assert.deepEqual(await page.evaluate(() => window.fovea.errors), []);
+  await page.close();
+});
