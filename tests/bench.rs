@@ -3,7 +3,7 @@
 
 use std::sync::atomic::AtomicBool;
 
-use fovea::bench::{run, sweep, write_reports, BenchOptions};
+use fovea::bench::{run, sweep, write_reports, BenchOptions, GroundTruth};
 use fovea::protocol::Display;
 use fovea::render::Renderer;
 
@@ -20,6 +20,7 @@ fn a_tiny_sweep_writes_json_markdown_and_svg() {
         configs: sweep("full,fast").unwrap(),
         display: Display::default(),
         pupil_mm: 4.0,
+        against: None,
     };
     let mut calls = 0;
     let report = run(
@@ -105,6 +106,7 @@ fn stopping_early_keeps_what_was_measured() {
         configs: sweep("full,fast").unwrap(),
         display: Display::default(),
         pupil_mm: 4.0,
+        against: None,
     };
     let stop = AtomicBool::new(false);
     let report = run(&mut renderer, &opts, &stop, &mut |done, _, _| {
@@ -118,4 +120,68 @@ fn stopping_early_keeps_what_was_measured() {
         !report.records.is_empty() && report.records.iter().all(|r| r.frames >= 1),
         "partial results are kept"
     );
+}
+
+#[test]
+fn against_ground_truth_compares_the_reference_rung_and_every_configuration() {
+    let mut renderer = Renderer::new().unwrap_or_else(|e| panic!("GPU tests need an adapter: {e}"));
+    // Ground truth that is exactly our reference render: the reference must then score
+    // perfectly against it, and every configuration exactly as against the reference.
+    let mut req = fovea::render::FrameRequest::new("bunny-marble", 48, 32);
+    req.settings = fovea::foveation::Settings::preset("reference").unwrap();
+    let frame = renderer.render(&req).unwrap();
+    let dir = std::env::temp_dir().join(format!("fovea-truth-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let png = dir.join("truth.png");
+    std::fs::write(
+        &png,
+        fovea::encode::encode(&frame.rgba, 48, 32, fovea::protocol::Codec::Png, 90).unwrap(),
+    )
+    .unwrap();
+    let opts = BenchOptions {
+        scenes: vec!["bunny-marble".into()],
+        sizes: vec![(48, 32)],
+        gazes: vec![[0.5, 0.5]],
+        moving: false,
+        warmup: 0,
+        frames: 1,
+        configs: sweep("full,fast").unwrap(),
+        display: Display::default(),
+        pupil_mm: 4.0,
+        against: Some(GroundTruth::load(&png).unwrap()),
+    };
+    let report = run(
+        &mut renderer,
+        &opts,
+        &AtomicBool::new(false),
+        &mut |_, _, _| {},
+    )
+    .unwrap();
+    let t = &report.reference_truth;
+    assert_eq!(t.len(), 1);
+    assert!(
+        t[0].errors.flip == 0.0 && t[0].errors.ssim == 1.0,
+        "{:?}",
+        t[0].errors
+    );
+    for r in &report.records {
+        let g = r
+            .ground_truth
+            .as_ref()
+            .expect("every configuration is compared");
+        assert_eq!(g.flip, r.errors.flip, "{}", r.config);
+    }
+    assert!(report.markdown().contains("Against physical ground truth"));
+
+    // EXR is linear: 0.5 becomes sRGB 188, and values above 1 clamp to white.
+    let exr = dir.join("truth.exr");
+    let img = image::Rgb32FImage::from_fn(2, 1, |x, _| {
+        image::Rgb(if x == 0 { [0.5; 3] } else { [4.0; 3] })
+    });
+    img.save(&exr).unwrap();
+    let g = GroundTruth::load(&exr).unwrap();
+    assert_eq!((g.width, g.height), (2, 1));
+    assert_eq!(g.rgba, vec![188, 188, 188, 255, 255, 255, 255, 255]);
+    assert!(GroundTruth::load(&dir.join("missing.png")).is_err());
+    let _ = std::fs::remove_dir_all(&dir);
 }

@@ -6,10 +6,12 @@
 //! percentile spread, and speedups are ratios against `full` from the same run.
 
 mod configs;
+mod ground_truth;
 mod plot;
 mod report;
 mod run;
 
 pub use configs::{sweep, BenchConfig};
-pub use report::{pareto_front, write_reports, BenchRecord, BenchReport, Spread};
+pub use ground_truth::{GroundTruth, GroundTruthError};
+pub use report::{pareto_front, write_reports, BenchRecord, BenchReport, ReferenceTruth, Spread};
 pub use run::{run, BenchOptions, Progress};

@@ -59,6 +59,9 @@ pub struct BenchRecord {
     pub sampled: f64,
     /// Medians over the measured frames, against the reference render of each frame.
     pub errors: Errors,
+    /// Medians against the physical ground truth (`--against`), when given.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub ground_truth: Option<Errors>,
     /// full's median frame time over this one's, same group, same run.
     pub speedup_vs_full: Option<f64>,
     /// The same ratio for the shading pass alone.
@@ -104,6 +107,22 @@ pub struct BenchReport {
     pub frames: u32,
     pub display: Display,
     pub records: Vec<BenchRecord>,
+    /// The ground-truth image (`--against`), if any.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub ground_truth: Option<String>,
+    /// Our reference rung against that image, per group of its size.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub reference_truth: Vec<ReferenceTruth>,
+}
+
+/// How far our own reference (the model's best) is from physical ground truth.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct ReferenceTruth {
+    pub scene: String,
+    pub width: u32,
+    pub height: u32,
+    pub gaze: [f32; 2],
+    pub errors: Errors,
 }
 
 type GroupKey = (String, u32, u32, [u32; 2]);
@@ -213,6 +232,39 @@ impl BenchReport {
                 r.encode_ms.median,
                 r.bytes / 1024.0,
             ));
+        }
+        if let Some(file) = &self.ground_truth {
+            s.push_str(&format!(
+                "\n## Against physical ground truth `{file}`\n\nMedians over the measured frames; the model's own reference first.\n\n| group | configuration | PSNR dB | SSIM | FLIP | FLIP pooled | FLIP 5° |\n|---|---|---:|---:|---:|---:|---:|\n"
+            ));
+            let row = |s: &mut String, group: String, name: &str, e: &Errors| {
+                s.push_str(&format!(
+                    "| {group} | {name} | {:.2} | {:.4} | {:.4} | {:.4} | {:.4} |\n",
+                    e.psnr, e.ssim, e.flip, e.flip_pooled, e.flip_fovea
+                ));
+            };
+            for t in &self.reference_truth {
+                let group = format!(
+                    "{} {}×{} ({:.2}, {:.2})",
+                    t.scene, t.width, t.height, t.gaze[0], t.gaze[1]
+                );
+                row(
+                    &mut s,
+                    group.clone(),
+                    "reference (brute-force dipole)",
+                    &t.errors,
+                );
+                for r in self.records.iter().filter(|r| {
+                    r.scene == t.scene
+                        && r.width == t.width
+                        && r.height == t.height
+                        && r.gaze == t.gaze
+                }) {
+                    if let Some(e) = &r.ground_truth {
+                        row(&mut s, group.clone(), &r.config, e);
+                    }
+                }
+            }
         }
         s
     }

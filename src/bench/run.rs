@@ -26,6 +26,8 @@ pub struct BenchOptions {
     pub configs: Vec<BenchConfig>,
     pub display: Display,
     pub pupil_mm: f32,
+    /// Physical ground truth to compare with too (groups of its size only).
+    pub against: Option<super::GroundTruth>,
 }
 
 /// Receives (frames done, frames in all, what is running) after every frame.
@@ -40,6 +42,8 @@ struct Samples {
     sampled: Vec<f64>,
     passes: BTreeMap<String, Vec<f64>>,
     errors: Vec<Errors>,
+    /// Against the ground truth image, when there is one.
+    truth: Vec<Errors>,
 }
 
 fn gaze_at(start: [f32; 2], moving: bool, frame: u32) -> [f32; 2] {
@@ -74,6 +78,7 @@ pub fn run(
     let total = groups.len() * per_group;
     let mut done = 0usize;
     let mut records = Vec::new();
+    let mut reference_truth = Vec::new();
     let mut interrupted = false;
     let reference = Settings::preset("reference").expect("reference is a preset");
     for (gi, (scene, (w, h), gaze0)) in groups.iter().enumerate() {
@@ -84,6 +89,11 @@ pub fn run(
             distance_cm: opts.display.distance_cm,
         };
         let mut samples: Vec<Samples> = opts.configs.iter().map(|_| Samples::default()).collect();
+        let truth = opts
+            .against
+            .as_ref()
+            .filter(|t| (t.width, t.height) == (*w, *h));
+        let mut reference_vs_truth = Vec::new();
         let stream_base = 1_000 * (gi as u64 + 1);
         'frames: for f in 0..opts.warmup + opts.frames {
             let gaze = gaze_at(*gaze0, opts.moving, f);
@@ -104,6 +114,12 @@ pub fn run(
                 f64::from(gaze[1]) * f64::from(*h),
             ];
             let weights = Weighting::default();
+            let compare = |truth: &super::GroundTruth, rgba: &[u8]| {
+                quality::measure(&truth.rgba, rgba, *w, *h, &viewing, gaze_px, &weights)
+            };
+            if let (Some(t), true) = (truth, measured) {
+                reference_vs_truth.push(compare(t, &reference_frame.rgba));
+            }
             for (ci, config) in opts.configs.iter().enumerate() {
                 if stop.load(Ordering::Relaxed) {
                     // Keep what this group measured so far; skip the rest.
@@ -127,6 +143,9 @@ pub fn run(
                 s.sampled.push(frame.sampled);
                 for (k, v) in &frame.passes_ms {
                     s.passes.entry(k.clone()).or_default().push(*v);
+                }
+                if let Some(t) = truth {
+                    s.truth.push(compare(t, &frame.rgba));
                 }
                 s.errors.push(quality::measure(
                     &reference_frame.rgba,
@@ -164,9 +183,19 @@ pub fn run(
                 bytes: Spread::of(&s.bytes).median,
                 sampled: Spread::of(&s.sampled).median,
                 errors: median_errors(&s.errors),
+                ground_truth: (!s.truth.is_empty()).then(|| median_errors(&s.truth)),
                 speedup_vs_full: None,
                 shade_speedup_vs_full: None,
                 pareto: false,
+            });
+        }
+        if !reference_vs_truth.is_empty() {
+            reference_truth.push(super::ReferenceTruth {
+                scene: scene.clone(),
+                width: *w,
+                height: *h,
+                gaze: *gaze0,
+                errors: median_errors(&reference_vs_truth),
             });
         }
         if interrupted {
@@ -182,6 +211,8 @@ pub fn run(
         frames: opts.frames,
         display: opts.display,
         records,
+        ground_truth: opts.against.as_ref().map(|t| t.path.display().to_string()),
+        reference_truth,
     };
     report.finish();
     Ok(report)

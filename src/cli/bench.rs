@@ -44,6 +44,11 @@ pub struct BenchArgs {
     /// Output directory for bench.json, bench.md and bench.svg.
     #[arg(long)]
     pub out: PathBuf,
+    /// Physical ground truth of the same scene, camera and size (tools/mitsuba_reference.py:
+    /// .exr linear in Fovea's units, or .png sRGB): every configuration and the reference rung
+    /// are also compared with it. Needs one scene and one size, the image's.
+    #[arg(long)]
+    pub against: Option<PathBuf>,
 }
 
 pub fn bench(a: BenchArgs) -> Result<()> {
@@ -66,6 +71,23 @@ pub fn bench(a: BenchArgs) -> Result<()> {
     for s in &scenes {
         fovea::scene::Scene::builtin(s)?;
     }
+    let against = a
+        .against
+        .as_deref()
+        .map(fovea::bench::GroundTruth::load)
+        .transpose()?;
+    if let Some(t) = &against {
+        if scenes.len() != 1 || sizes != [(t.width, t.height)] {
+            anyhow::bail!(
+                "--against {}: the image is {}x{}; run one scene at that size (--width {} --height {})",
+                t.path.display(),
+                t.width,
+                t.height,
+                t.width,
+                t.height
+            );
+        }
+    }
     let opts = fovea::bench::BenchOptions {
         scenes,
         sizes,
@@ -79,6 +101,7 @@ pub fn bench(a: BenchArgs) -> Result<()> {
             distance_cm: a.distance_cm,
         },
         pupil_mm: a.pupil_mm,
+        against,
     };
     let stop = Arc::new(AtomicBool::new(false));
     let flag = stop.clone();
