@@ -61,6 +61,10 @@ enum Command {
         /// Scene to render (built-in: bunny).
         #[arg(long, default_value = fovea::scene::DEFAULT_SCENE)]
         scene: String,
+        /// A scene file of your own (docs/scenes.md) instead of a built-in scene; its meshes
+        /// must be built in.
+        #[arg(long, conflicts_with = "scene")]
+        scene_file: Option<PathBuf>,
         #[arg(long, default_value_t = 640)]
         width: u32,
         #[arg(long, default_value_t = 480)]
@@ -246,6 +250,7 @@ fn main() -> Result<()> {
         Command::Radiosity(args) => radiosity(args),
         Command::Render {
             scene,
+            scene_file,
             width,
             height,
             gaze,
@@ -261,9 +266,21 @@ fn main() -> Result<()> {
             distance_cm,
             knobs,
         } => {
+            let own = scene_file
+                .map(|path| {
+                    let json = std::fs::read_to_string(&path)
+                        .with_context(|| format!("reading {}", path.display()))?;
+                    fovea::scene::Scene::from_json(&json)
+                        .with_context(|| format!("loading {}", path.display()))
+                })
+                .transpose()?;
+            let scene = own.as_ref().map_or(scene, |s| s.name().to_string());
             if explain {
-                let scene = fovea::scene::Scene::builtin(&scene)?;
-                print!("{}", fovea::scene::Plan::of(&scene, width, height));
+                let s = match &own {
+                    Some(s) => s.clone(),
+                    None => fovea::scene::Scene::builtin(&scene)?,
+                };
+                print!("{}", fovea::scene::Plan::of(&s, width, height));
                 return Ok(());
             }
             let out = out.context("--out is required")?;
@@ -300,7 +317,7 @@ fn main() -> Result<()> {
                 width_cm: display_width_cm,
                 distance_cm,
             };
-            render(request, &out, quality, frames)
+            render(request, own, &out, quality, frames)
         }
     }
 }
@@ -357,7 +374,13 @@ async fn stop_on_signal(shutdown: CancellationToken) {
     shutdown.cancel();
 }
 
-fn render(request: FrameRequest, out: &std::path::Path, quality: u8, frames: u32) -> Result<()> {
+fn render(
+    request: FrameRequest,
+    own: Option<fovea::scene::Scene>,
+    out: &std::path::Path,
+    quality: u8,
+    frames: u32,
+) -> Result<()> {
     let ext = out
         .extension()
         .and_then(|e| e.to_str())
@@ -372,6 +395,9 @@ fn render(request: FrameRequest, out: &std::path::Path, quality: u8, frames: u32
     };
     let mut renderer = Renderer::new().context("opening the GPU")?;
     eprintln!("adapter: {}", renderer.adapter());
+    if let Some(scene) = own {
+        renderer.add_scene(scene);
+    }
     // A still image shows the converged solution; the server streams the refining preview.
     if let Some(solve) = renderer.radiosity(&request.scene)? {
         eprintln!("radiosity: solving before rendering…");
