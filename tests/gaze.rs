@@ -6,26 +6,16 @@ use std::time::Duration;
 use fovea::client::replay::{replay, ReplayOptions};
 use fovea::gaze::formats::{parse, ParseOptions};
 use fovea::protocol::Hello;
-use fovea::render::{RenderThread, Renderer};
-use tokio_util::sync::CancellationToken;
 
-async fn server(record: Option<std::path::PathBuf>) -> (String, CancellationToken) {
-    let renderer = Renderer::new().unwrap_or_else(|e| panic!("GPU tests need an adapter: {e}"));
-    let (render, _) = RenderThread::spawn(renderer).unwrap();
-    let listener = tokio::net::TcpListener::bind("127.0.0.1:0").await.unwrap();
-    let url = format!("ws://{}/ws", listener.local_addr().unwrap());
-    let shutdown = CancellationToken::new();
+mod common;
+
+async fn server(record: Option<std::path::PathBuf>) -> (String, common::Running) {
     let options = fovea::server::ServerOptions {
         record_dir: record,
         ..Default::default()
     };
-    tokio::spawn(fovea::server::run_with(
-        listener,
-        render,
-        shutdown.clone(),
-        options,
-    ));
-    (url, shutdown)
+    let (addr, running) = common::start(options).await;
+    (format!("ws://{addr}/ws"), running)
 }
 
 fn options(url: &str) -> ReplayOptions {
@@ -81,7 +71,7 @@ async fn a_real_recording_replays_with_nothing_lost_and_much_coalesced() {
     // Frames answer samples in order.
     let seqs: Vec<u64> = frames.iter().filter_map(|f| f.seq).collect();
     assert!(seqs.windows(2).all(|w| w[0] < w[1]));
-    shutdown.cancel();
+    shutdown.stop().await;
 }
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
@@ -139,6 +129,6 @@ async fn a_recorded_session_replays_to_the_same_frames() {
     for k in common {
         assert_eq!(a[&k], b[&k], "sample {k}");
     }
-    shutdown.cancel();
+    shutdown.stop().await;
     let _ = std::fs::remove_dir_all(&dir);
 }

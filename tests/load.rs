@@ -7,28 +7,17 @@ use std::time::Duration;
 use fovea::client::load::{run, LoadOptions};
 use fovea::client::{Client, Event};
 use fovea::protocol::{Ack, Gaze, Hello};
-use fovea::render::{RenderThread, Renderer};
 use fovea::server::ServerOptions;
 use tokio::io::{AsyncReadExt, AsyncWriteExt};
-use tokio_util::sync::CancellationToken;
 
 const WAIT: Duration = Duration::from_secs(30);
 /// The metrics recorder is process-wide: tests that read /metrics must not overlap.
 static SERIAL: tokio::sync::Mutex<()> = tokio::sync::Mutex::const_new(());
 
-async fn server(options: ServerOptions) -> (SocketAddr, CancellationToken) {
-    let renderer = Renderer::new().unwrap_or_else(|e| panic!("GPU tests need an adapter: {e}"));
-    let (render, _) = RenderThread::spawn(renderer).unwrap();
-    let listener = tokio::net::TcpListener::bind("127.0.0.1:0").await.unwrap();
-    let addr = listener.local_addr().unwrap();
-    let shutdown = CancellationToken::new();
-    tokio::spawn(fovea::server::run_with(
-        listener,
-        render,
-        shutdown.clone(),
-        options,
-    ));
-    (addr, shutdown)
+mod common;
+
+async fn server(options: ServerOptions) -> (SocketAddr, common::Running) {
+    common::start(options).await
 }
 
 fn small() -> Hello {
@@ -189,7 +178,7 @@ async fn admission_stalls_and_the_load_report() {
         m.contains("fovea_stage_seconds_bucket") && m.contains("fovea_sessions_refused_total"),
         "{m}"
     );
-    shutdown.cancel();
+    shutdown.stop().await;
 }
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
@@ -222,7 +211,7 @@ async fn load_can_be_driven_by_a_gaze_recording() {
         report.frames > 4 && report.samples_coalesced > 0,
         "{report:?}"
     );
-    shutdown.cancel();
+    shutdown.stop().await;
 }
 
 fn metric(text: &str, name: &str) -> f64 {
@@ -261,5 +250,5 @@ async fn three_sessions_share_the_renderer_fairly() {
         "fps per session {:?}",
         report.fps_per_session
     );
-    shutdown.cancel();
+    shutdown.stop().await;
 }

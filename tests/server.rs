@@ -15,13 +15,15 @@ struct Server {
     addr: SocketAddr,
     shutdown: CancellationToken,
     task: tokio::task::JoinHandle<std::io::Result<()>>,
+    /// Joined in `stop`: a process must not exit while the render thread is in the driver.
+    thread: std::thread::JoinHandle<()>,
 }
 
 impl Server {
     async fn start() -> Server {
         let renderer =
             Renderer::new().unwrap_or_else(|e| panic!("server tests need a GPU adapter: {e}"));
-        let (render, _thread) = RenderThread::spawn(renderer).unwrap();
+        let (render, thread) = RenderThread::spawn(renderer).unwrap();
         let listener = tokio::net::TcpListener::bind("127.0.0.1:0").await.unwrap();
         let addr = listener.local_addr().unwrap();
         let shutdown = CancellationToken::new();
@@ -30,6 +32,7 @@ impl Server {
             addr,
             shutdown,
             task,
+            thread,
         }
     }
 
@@ -46,6 +49,12 @@ impl Server {
         tokio::time::timeout(WAIT, self.task)
             .await
             .expect("server stops")
+            .unwrap()
+            .unwrap();
+        let thread = self.thread;
+        tokio::time::timeout(WAIT, tokio::task::spawn_blocking(move || thread.join()))
+            .await
+            .expect("the render thread ends once the server is gone")
             .unwrap()
             .unwrap();
     }

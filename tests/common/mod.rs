@@ -1,0 +1,49 @@
+//! A server on a loopback port for tests, stopped the way production stops: cancel, wait for
+//! the server task, then join the render thread, so no test process exits while the render
+//! thread is still inside the Vulkan driver (lavapipe crashes at exit if it is).
+
+use std::net::SocketAddr;
+use std::time::Duration;
+
+use fovea::render::{RenderThread, Renderer};
+use fovea::server::ServerOptions;
+use tokio_util::sync::CancellationToken;
+
+pub struct Running {
+    shutdown: CancellationToken,
+    task: tokio::task::JoinHandle<std::io::Result<()>>,
+    thread: std::thread::JoinHandle<()>,
+}
+
+impl Running {
+    pub async fn stop(self) {
+        self.shutdown.cancel();
+        let wait = Duration::from_secs(30);
+        let _ = tokio::time::timeout(wait, self.task).await;
+        let thread = self.thread;
+        let _ =
+            tokio::time::timeout(wait, tokio::task::spawn_blocking(move || thread.join())).await;
+    }
+}
+
+pub async fn start(options: ServerOptions) -> (SocketAddr, Running) {
+    let renderer = Renderer::new().unwrap_or_else(|e| panic!("GPU tests need an adapter: {e}"));
+    let (render, thread) = RenderThread::spawn(renderer).unwrap();
+    let listener = tokio::net::TcpListener::bind("127.0.0.1:0").await.unwrap();
+    let addr = listener.local_addr().unwrap();
+    let shutdown = CancellationToken::new();
+    let task = tokio::spawn(fovea::server::run_with(
+        listener,
+        render,
+        shutdown.clone(),
+        options,
+    ));
+    (
+        addr,
+        Running {
+            shutdown,
+            task,
+            thread,
+        },
+    )
+}
