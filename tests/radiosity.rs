@@ -223,10 +223,11 @@ fn back_to_back_and_coincident_elements_exchange_nothing_or_a_bounded_amount() {
 fn shadow_edges_subdivide_within_the_depth_bound() {
     let mut surfaces = closed_cube(4, 2, 0.5, 0.0);
     // A small lamp under the ceiling and a blocker above the floor casting a hard shadow.
+    // The lamp faces down (X × Z = −Y).
     surfaces.push(quad(
         Vec3::new(0.4, 0.98, 0.4),
-        Vec3::Z * 0.2,
         Vec3::X * 0.2,
+        Vec3::Z * 0.2,
         1,
         0,
         0.0,
@@ -317,4 +318,67 @@ fn one_solve_is_shared_publishes_monotone_snapshots_and_converges() {
     let other =
         RadiosityHandle::start("cube", closed_cube(5, 1, 0.5, 1.0), Options::default()).unwrap();
     assert!(!other.same_solve(&a), "different reflectance: a new solve");
+}
+
+#[test]
+fn depth_cube_visibility_agrees_with_shadow_rays() {
+    use fovea::radiosity::Visibility;
+    let mut surfaces = closed_cube(4, 2, 0.5, 0.0);
+    surfaces.push(quad(
+        Vec3::new(0.4, 0.98, 0.4),
+        Vec3::X * 0.2,
+        Vec3::Z * 0.2,
+        1,
+        0,
+        0.0,
+        20.0,
+    ));
+    surfaces.push(quad(
+        Vec3::new(0.3, 0.5, 0.3),
+        Vec3::X * 0.4,
+        Vec3::Z * 0.4,
+        1,
+        0,
+        0.5,
+        0.0,
+    ));
+    let run = |visibility| {
+        let mut s = Solver::new(
+            &surfaces,
+            Options {
+                visibility,
+                ..serial()
+            },
+        )
+        .unwrap();
+        s.step().expect("the lamp shoots");
+        s.irradiance(false).0
+    };
+    let rays = run(Visibility::Rays);
+    let cube = run(Visibility::Cube { resolution: 256 });
+    assert_eq!(rays.len(), cube.len());
+    // The floor's centre (lattice point (8, 8) of 17 × 17) lies in the blocker's shadow in both.
+    let peak = rays.iter().map(|e| e.x).fold(0.0, f32::max);
+    let centre = 8 * 17 + 8;
+    assert!(rays[centre].x < 0.02 * peak && cube[centre].x < 0.02 * peak);
+    // The back wall above the blocker (surface 4, lattice point (8, 12)) is lit in both.
+    let wall = 4 * 17 * 17 + 12 * 17 + 8;
+    assert!(
+        rays[wall].x > 0.1 * peak && cube[wall].x > 0.1 * peak,
+        "the back wall is lit"
+    );
+    // The same hard shadow: irradiance differs by more than 10% of the peak at few vertices
+    // (shadow-edge texels and subdivision that followed them).
+    let differ = rays
+        .iter()
+        .zip(&cube)
+        .filter(|(a, b)| (a.x - b.x).abs() > 0.1 * peak)
+        .count();
+    assert!(
+        differ * 50 < rays.len(),
+        "{differ} of {} vertices differ",
+        rays.len()
+    );
+    let mean = |v: &[Vec3]| v.iter().map(|e| e.x).sum::<f32>() / v.len() as f32;
+    assert!((mean(&rays) - mean(&cube)).abs() < 0.03 * mean(&rays));
 }

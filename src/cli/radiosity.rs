@@ -30,6 +30,10 @@ pub struct RadiosityArgs {
     /// Solver threads (0: all cores).
     #[arg(long, default_value_t = 0)]
     threads: usize,
+    /// Visibility: 0 for shadow rays against a BVH (the product's), or N for the seeds'
+    /// alternative, the scene rasterised into a cube of N×N depth maps around each shooter.
+    #[arg(long, default_value_t = 0)]
+    cube: usize,
 }
 
 /// The first time the reflected power reaches `share` of its converged value.
@@ -57,6 +61,10 @@ pub fn radiosity(a: RadiosityArgs) -> Result<()> {
     let options = Options {
         stop_fraction: scene.file.radiosity.map_or(0.001, |r| r.stop_fraction),
         threads: a.threads,
+        visibility: match a.cube {
+            0 => fovea::radiosity::Visibility::Rays,
+            resolution => fovea::radiosity::Visibility::Cube { resolution },
+        },
         ..Options::default()
     };
     let surfaces = scene.radiosity_surfaces();
@@ -168,6 +176,7 @@ pub fn radiosity(a: RadiosityArgs) -> Result<()> {
         "scene": a.scene,
         "machine": std::env::consts::ARCH,
         "threads": options.threads,
+        "visibility": format!("{:?}", options.visibility),
         "patches": end.patches,
         "elements_initial": first.elements,
         "elements": end.elements,
@@ -191,11 +200,11 @@ pub fn radiosity(a: RadiosityArgs) -> Result<()> {
         t.map_or("–".to_string(), |(s, n)| format!("{s:.2} s ({n} shots)"))
     };
     let mut md = format!(
-        "# Radiosity: `{}`\n\n{} patches; {} elements at the start, {} after adaptive subdivision; {} receiving samples.\n\n\
+        "# Radiosity: `{}` ({:?} visibility)\n\n{} patches; {} elements at the start, {} after adaptive subdivision; {} receiving samples.\n\n\
          | | time |\n|---|---|\n| set-up (elements, BVH) | {:.0} ms |\n| 90% of the converged reflected energy | {} |\n\
          | 99% of the converged reflected energy | {} |\n| unshot < 10% of emitted | {} |\n| unshot < 1% of emitted | {} |\n\
          | converged (unshot < {}%) | {total_s:.2} s ({} shots) |\n",
-        a.scene, end.patches, first.elements, end.elements, end.vertices, setup_s * 1e3, fmt(t90), fmt(t99), fmt(u10), fmt(u1),
+        a.scene, options.visibility, end.patches, first.elements, end.elements, end.vertices, setup_s * 1e3, fmt(t90), fmt(t99), fmt(u10), fmt(u1),
         100.0 * options.stop_fraction, end.shots
     );
     if !rows.is_empty() {

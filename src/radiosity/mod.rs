@@ -18,6 +18,7 @@
 mod bvh;
 pub mod cache;
 pub mod form_factor;
+mod hemicube;
 mod solver;
 
 pub use cache::{Progress, RadiosityHandle, Snapshot};
@@ -84,6 +85,17 @@ pub struct Options {
     pub max_shots: u32,
     /// Worker threads for the receivers of one shot (0: all cores).
     pub threads: usize,
+    pub visibility: Visibility,
+}
+
+/// How a shot finds which receivers see the shooter.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Visibility {
+    /// One shadow ray per receiving sample against a BVH (the default).
+    Rays,
+    /// The scene rasterised around the shooter into a cube of depth maps, `resolution`² texels
+    /// per face (the seeds' hemicube, as a depth map): kept to measure against the rays.
+    Cube { resolution: usize },
 }
 
 impl Default for Options {
@@ -94,6 +106,7 @@ impl Default for Options {
             stop_fraction: 0.001,
             max_shots: 20_000,
             threads: 0,
+            visibility: Visibility::Rays,
         }
     }
 }

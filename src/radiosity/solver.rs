@@ -9,7 +9,9 @@ mod build;
 
 use super::bvh::Bvh;
 use super::form_factor::{point_to_patch, Facet};
-use super::{lattice, luminance, Options, RadiosityError, Surface};
+use super::hemicube::DepthCube;
+use super::{lattice, luminance, Options, RadiosityError, Surface, Visibility};
+use std::sync::{Arc, Mutex};
 
 #[derive(Debug, Clone)]
 struct Vertex {
@@ -114,6 +116,10 @@ pub struct Stats {
 pub struct Solver {
     options: Options,
     bvh: Bvh,
+    /// The scene's triangles, for depth-cube visibility.
+    tris: Vec<[Vec3; 3]>,
+    /// The depth cube of the current shot (patch, shot number), built once per shot.
+    cube: Mutex<Option<(usize, u32, Arc<DepthCube>)>>,
     margin: f32,
     vertices: Vec<Vertex>,
     elements: Vec<Element>,
@@ -157,6 +163,8 @@ impl Solver {
         let mut solver = Solver {
             options,
             bvh: Bvh::new(&tris),
+            tris,
+            cube: Mutex::new(None),
             margin: 1e-4 * scale,
             vertices: Vec::new(),
             elements: Vec::new(),
@@ -304,12 +312,11 @@ impl Solver {
     /// One sample per element would break reciprocity by ~20% between touching patches.
     fn element_factors(&self, p: usize, factors: &[f32]) -> Vec<(u32, f32)> {
         let patch = &self.patches[p];
+        let cube = self.cube_for(p);
         let sampled = |pos: Vec3, normal: Vec3| {
             let f = point_to_patch(pos, normal, &patch.facets);
-            let blocked = f > 0.0
-                && self
-                    .bvh
-                    .occluded(pos + normal * self.margin, patch.target, self.margin);
+            let blocked =
+                f > 0.0 && self.blocked(cube.as_deref(), pos + normal * self.margin, patch.target);
             if blocked {
                 0.0
             } else {
@@ -356,6 +363,34 @@ impl Solver {
         out
     }
 
+    /// The depth cube around patch p for this shot, when that is the visibility in use.
+    fn cube_for(&self, p: usize) -> Option<Arc<DepthCube>> {
+        let Visibility::Cube { resolution } = self.options.visibility else {
+            return None;
+        };
+        let mut slot = self.cube.lock().unwrap_or_else(|e| e.into_inner());
+        if let Some((q, shot, cube)) = slot.as_ref() {
+            if *q == p && *shot == self.shots {
+                return Some(cube.clone());
+            }
+        }
+        let cube = Arc::new(DepthCube::new(
+            self.patches[p].target,
+            &self.tris,
+            resolution,
+            self.margin,
+        ));
+        *slot = Some((p, self.shots, cube.clone()));
+        Some(cube)
+    }
+
+    fn blocked(&self, cube: Option<&DepthCube>, from: Vec3, to: Vec3) -> bool {
+        match cube {
+            Some(c) => !c.visible(from, 4.0 * self.margin),
+            None => self.bvh.occluded(from, to, self.margin),
+        }
+    }
+
     /// F(v → patch p) with visibility, for the given vertices, split across threads.
     fn vertex_factors(&self, p: usize, range: std::ops::Range<usize>) -> Vec<f32> {
         let patch = &self.patches[p];
@@ -365,9 +400,10 @@ impl Solver {
         };
         let verts = &self.vertices[range];
         let chunk = verts.len().div_ceil(threads).max(64);
+        let cube = self.cube_for(p);
         let one = |v: &Vertex| {
             let f = point_to_patch(v.origin, v.normal, &patch.facets);
-            if f > 0.0 && self.bvh.occluded(v.origin, patch.target, self.margin) {
+            if f > 0.0 && self.blocked(cube.as_deref(), v.origin, patch.target) {
                 0.0
             } else {
                 f
