@@ -8,6 +8,8 @@
 
 pub mod cpu_reference;
 mod device;
+mod frame_uniform;
+mod gi;
 pub mod gpu;
 pub mod materials;
 pub mod pass;
