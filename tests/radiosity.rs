@@ -219,29 +219,19 @@ fn back_to_back_and_coincident_elements_exchange_nothing_or_a_bounded_amount() {
     }
 }
 
+/// The closed cube (not emitting) with a small lamp under the ceiling, facing down (X × Z =
+/// −Y), and a blocker halfway down casting a hard shadow on the floor. The lamp is patch 96.
+fn lamp_over_blocker() -> Vec<Surface> {
+    let mut surfaces = closed_cube(4, 2, 0.5, 0.0);
+    let (lamp, blocker) = (Vec3::new(0.4, 0.98, 0.4), Vec3::new(0.3, 0.5, 0.3));
+    surfaces.push(quad(lamp, Vec3::X * 0.2, Vec3::Z * 0.2, 1, 0, 0.0, 20.0));
+    surfaces.push(quad(blocker, Vec3::X * 0.4, Vec3::Z * 0.4, 1, 0, 0.5, 0.0));
+    surfaces
+}
+
 #[test]
 fn shadow_edges_subdivide_within_the_depth_bound() {
-    let mut surfaces = closed_cube(4, 2, 0.5, 0.0);
-    // A small lamp under the ceiling and a blocker above the floor casting a hard shadow.
-    // The lamp faces down (X × Z = −Y).
-    surfaces.push(quad(
-        Vec3::new(0.4, 0.98, 0.4),
-        Vec3::X * 0.2,
-        Vec3::Z * 0.2,
-        1,
-        0,
-        0.0,
-        20.0,
-    ));
-    surfaces.push(quad(
-        Vec3::new(0.3, 0.5, 0.3),
-        Vec3::X * 0.4,
-        Vec3::Z * 0.4,
-        1,
-        0,
-        0.5,
-        0.0,
-    ));
+    let surfaces = lamp_over_blocker();
     let mut solver = Solver::new(&surfaces, serial()).unwrap();
     let before = solver.stats().elements;
     let first = solver.step().expect("the lamp shoots");
@@ -323,25 +313,7 @@ fn one_solve_is_shared_publishes_monotone_snapshots_and_converges() {
 #[test]
 fn depth_cube_visibility_agrees_with_shadow_rays() {
     use fovea::radiosity::Visibility;
-    let mut surfaces = closed_cube(4, 2, 0.5, 0.0);
-    surfaces.push(quad(
-        Vec3::new(0.4, 0.98, 0.4),
-        Vec3::X * 0.2,
-        Vec3::Z * 0.2,
-        1,
-        0,
-        0.0,
-        20.0,
-    ));
-    surfaces.push(quad(
-        Vec3::new(0.3, 0.5, 0.3),
-        Vec3::X * 0.4,
-        Vec3::Z * 0.4,
-        1,
-        0,
-        0.5,
-        0.0,
-    ));
+    let surfaces = lamp_over_blocker();
     let run = |visibility| {
         let mut s = Solver::new(
             &surfaces,
