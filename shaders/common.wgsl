@@ -1,50 +1,54 @@
 // Shared by every pass: the frame's uniforms and small helpers. Prepended to each pass's source
 // (see src/render/gpu.rs `compose`).
 
+// The frame's uniforms. Rust twin: FrameUniform in src/render/uniforms.rs (field docs there);
+// tests/shaders.rs compares every offset. The MODE_*, FLAG_*, RUNG_*, OVERLAY_*, PROBABILITY_*
+// and NO_SEED constants are generated from that file and placed in front of this prelude.
 struct Frame {
     view_proj: mat4x4<f32>,
     inv_view_proj: mat4x4<f32>,
     prev_view_proj: mat4x4<f32>,
-    // xyz: camera position; w: metres per scene unit.
-    eye: vec4<f32>,
-    // xyz: last frame's camera position; w: 1 when last frame's buffers are valid history.
-    prev_eye: vec4<f32>,
-    // xyz: unit vector towards the light.
-    to_light: vec4<f32>,
-    // rgb: light colour × intensity.
-    light: vec4<f32>,
-    // w: ambient as a fraction of the light (xyz unused: albedo is per material).
-    albedo_ambient: vec4<f32>,
-    // rgb: background colour, linear.
-    background: vec4<f32>,
-    // x, y: frame size; z: frame index; w: mode bits (MODE_*).
-    size: vec4<u32>,
-    // xy: gaze in pixels (top-left origin); z: pupil diameter, mm; w: focus distance, scene units.
-    gaze: vec4<f32>,
-    // x: display cm per pixel; y: viewing distance, cm; z: w_min (pixel angle), deg; w: w_far, deg.
-    viewing: vec4<f32>,
-    // x: MAR slope; y: MAR at the fovea w0, deg; z: minimum probability ξ; w: 0 linear, 1 density form.
-    acuity: vec4<f32>,
-    // x: max history age, frames; y: relative depth tolerance ε; z: camera radians per pixel;
-    // w: Sibson window bound, pixels.
-    temporal: vec4<f32>,
-    // xy: blue-noise tile offset; z: overlay (0 none, 1 samples, 2 probability); w: unused.
-    tile: vec4<u32>,
-    // Gaze marker: xy centre in pixels; z ring radius, w ring thickness (pixels); z = 0: none.
-    marker: vec4<f32>,
-    // x: photon map side; y: a photon's radius, mm (its texel footprint as a disc); z: traversal
-    // start level; w: millimetres per scene unit.
-    photon: vec4<f32>,
-    // x: cut level (the finest level a cluster may come from); y: cut ε (a cluster is used when
-    // its extent < ε × its distance); z: translucency rung (RUNG_*); w: 1 when the pyramid exists.
-    cut: vec4<f32>,
+    eye: vec3<f32>,
+    metres_per_unit: f32,
+    prev_eye: vec3<f32>,
+    has_history: u32,
+    to_light: vec3<f32>,
+    ambient: f32,
+    light: vec3<f32>,
+    mm_per_unit: f32,
+    background: vec3<f32>,
+    overlay: u32,
+    width: u32,
+    height: u32,
+    frame_index: u32,
+    mode: u32,
+    gaze_px: vec2<f32>,
+    pupil_mm: f32,
+    focus_distance: f32,
+    cm_per_pixel: f32,
+    distance_cm: f32,
+    w_min_deg: f32,
+    w_far_deg: f32,
+    mar_slope: f32,
+    mar_w0_deg: f32,
+    min_probability: f32,
+    probability_form: u32,
+    max_history_age: u32,
+    depth_epsilon: f32,
+    radians_per_pixel: f32,
+    sibson_window: u32,
+    tile_offset: vec2<u32>,
+    marker_centre: vec2<f32>,
+    marker_radius: f32,
+    marker_thickness: f32,
+    photon_side: u32,
+    photon_radius_mm: f32,
+    photon_start_level: u32,
+    cut_level: u32,
+    cut_epsilon: f32,
+    rung: u32,
+    pyramid_ready: u32,
 }
-
-const RUNG_OPAQUE: u32 = 0u;
-const RUNG_NORMAL_BLUR: u32 = 1u;
-const RUNG_SCREEN: u32 = 2u;
-const RUNG_HIERARCHICAL: u32 = 3u;
-const RUNG_BRUTE_FORCE: u32 = 4u;
 
 // One material, as the renderer uploads it (src/render/materials.rs).
 struct Material {
@@ -99,33 +103,19 @@ fn dipole_rd(m: Material, r: f32) -> vec3<f32> {
     return m.alpha.xyz / (4.0 * 3.14159265) * (real + virt);
 }
 
-const MODE_FOVEATED: u32 = 1u;
-const MODE_SALIENCY: u32 = 2u;
-const MODE_MOTION: u32 = 4u;
-const MODE_WHITE_NOISE: u32 = 8u;
-const MODE_REPROJECTION: u32 = 16u;
-const MODE_SIBSON: u32 = 32u;
-const MODE_DOF: u32 = 64u;
-// Radiosity's direct light only (the interreflected part left out, for comparison).
-const MODE_DIRECT_ONLY: u32 = 128u;
 
-// Per-pixel state written by the sampling pass.
-const FLAG_COVERED: u32 = 1u;
-const FLAG_SAMPLED: u32 = 2u;
-const FLAG_REUSED: u32 = 4u;
 
-const NO_SEED: u32 = 0xFFFFFFFFu;
 // History age marking "no valid colour here".
 const INVALID_AGE: f32 = 65000.0;
 
 @group(0) @binding(0) var<uniform> frame: Frame;
 
 fn has_mode(bit: u32) -> bool {
-    return (frame.size.w & bit) != 0u;
+    return (frame.mode & bit) != 0u;
 }
 
 fn frame_size() -> vec2<i32> {
-    return vec2<i32>(i32(frame.size.x), i32(frame.size.y));
+    return vec2<i32>(i32(frame.width), i32(frame.height));
 }
 
 fn in_frame(p: vec2<i32>) -> bool {
@@ -136,7 +126,7 @@ fn in_frame(p: vec2<i32>) -> bool {
 // Per-pixel buffers are row-major arrays: storage buffers are much cheaper than storage
 // textures on software adapters, and no slower on GPUs for these access patterns.
 fn index_of(p: vec2<i32>) -> u32 {
-    return u32(p.y) * frame.size.x + u32(p.x);
+    return u32(p.y) * frame.width + u32(p.x);
 }
 
 fn pack_seed(p: vec2<i32>) -> u32 {
@@ -185,12 +175,12 @@ struct Photons {
 // Depth under the gaze, from the G-buffer's normal + distance: what the eye focuses on. Off the
 // object, the camera's target distance.
 fn focus_distance(normal_distance: texture_2d<f32>) -> f32 {
-    let g = clamp(vec2<i32>(floor(frame.gaze.xy)), vec2<i32>(0), frame_size() - 1);
+    let g = clamp(vec2<i32>(floor(frame.gaze_px)), vec2<i32>(0), frame_size() - 1);
     let d = textureLoad(normal_distance, g, 0).w;
     if (d > 0.0) {
         return d;
     }
-    return frame.gaze.w;
+    return frame.focus_distance;
 }
 
 // Material id stored in the G-buffer albedo alpha ((id + 1)/255; 0 = background).
@@ -205,8 +195,8 @@ fn lambert(normal: vec3<f32>, albedo: vec3<f32>) -> vec3<f32> {
     if (len > 1e-20) {
         n = normal / len;
     }
-    let cos_theta = max(dot(n, frame.to_light.xyz), 0.0);
-    return albedo * frame.light.rgb * (cos_theta + frame.albedo_ambient.w);
+    let cos_theta = max(dot(n, frame.to_light), 0.0);
+    return albedo * frame.light * (cos_theta + frame.ambient);
 }
 
 // Unit direction of the camera ray through pixel centre p.
@@ -214,5 +204,5 @@ fn view_ray(p: vec2<f32>) -> vec3<f32> {
     let s = vec2<f32>(frame_size());
     let ndc = vec2<f32>(p.x / s.x * 2.0 - 1.0, 1.0 - p.y / s.y * 2.0);
     let far = frame.inv_view_proj * vec4<f32>(ndc, 1.0, 1.0);
-    return normalize(far.xyz / far.w - frame.eye.xyz);
+    return normalize(far.xyz / far.w - frame.eye);
 }

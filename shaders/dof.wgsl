@@ -14,10 +14,10 @@ fn blur_radius_px(p: vec2<i32>) -> f32 {
     if (d <= 0.0) {
         return 0.0;
     }
-    let metres = frame.eye.w;
+    let metres = frame.metres_per_unit;
     let focus = max(focus_distance(normal_distance) * metres, 1e-3);
-    let beta = frame.gaze.z * 1e-3 * abs(1.0 / focus - 1.0 / max(d * metres, 1e-3));
-    return min(0.5 * beta / frame.temporal.z, MAX_RADIUS_PX);
+    let beta = frame.pupil_mm * 1e-3 * abs(1.0 / focus - 1.0 / max(d * metres, 1e-3));
+    return min(0.5 * beta / frame.radians_per_pixel, MAX_RADIUS_PX);
 }
 
 @compute @workgroup_size(8, 8)

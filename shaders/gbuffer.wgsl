@@ -47,7 +47,7 @@ fn fs_main(in: VertexOut) -> GBuffer {
     if (len > 1e-20) {
         n = in.normal / len;
     }
-    g.normal_distance = vec4<f32>(n, distance(in.world, frame.eye.xyz));
+    g.normal_distance = vec4<f32>(n, distance(in.world, frame.eye));
     g.albedo = vec4<f32>(materials[in.material].albedo.rgb, f32(in.material + 1u) / 255.0);
     g.irradiance = vec4<f32>(in.irradiance, 0.0);
     g.blurred_normal = vec4<f32>(clamp(in.blurred_normal, vec3<f32>(-1.0), vec3<f32>(1.0)) * 0.5 + 0.5, 0.0);

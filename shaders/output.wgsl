@@ -15,11 +15,12 @@ fn band(distance_to_curve: f32, half_width: f32) -> f32 {
 
 // The marker over an sRGB-encoded colour.
 fn draw_marker(p: vec2<f32>, under: vec3<f32>) -> vec3<f32> {
-    let c = frame.marker;
-    let d = distance(p, c.xy);
-    let half_t = 0.5 * c.w;
-    let fill = max(band(abs(d - c.z), half_t), band(d, 0.6 * c.w));
-    let outline = max(band(abs(d - c.z), half_t + 1.5), band(d, 0.6 * c.w + 1.5));
+    let d = distance(p, frame.marker_centre);
+    let r = frame.marker_radius;
+    let t = frame.marker_thickness;
+    let half_t = 0.5 * t;
+    let fill = max(band(abs(d - r), half_t), band(d, 0.6 * t));
+    let outline = max(band(abs(d - r), half_t + 1.5), band(d, 0.6 * t + 1.5));
     let magenta = vec3<f32>(1.0, 0.25, 0.8);
     let alpha = max(0.85 * outline, fill);
     // Premultiplied: the magenta fill over a dark outline over the frame.
@@ -48,9 +49,9 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
     }
     let k = index_of(p);
     var rgb = src[k].rgb;
-    if (has_mode(MODE_FOVEATED) && frame.tile.z != 0u) {
+    if (has_mode(MODE_FOVEATED) && frame.overlay != OVERLAY_NONE) {
         let f = flags[k];
-        if (frame.tile.z == 1u) {
+        if (frame.overlay == OVERLAY_SAMPLES) {
             if ((f & FLAG_SAMPLED) != 0u) {
                 rgb = mix(rgb, vec3<f32>(0.1, 1.0, 0.2), 0.6);
             } else if ((f & FLAG_REUSED) != 0u) {
@@ -61,7 +62,7 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
         }
     }
     var s = vec3<f32>(linear_to_srgb(rgb.r), linear_to_srgb(rgb.g), linear_to_srgb(rgb.b));
-    if (frame.marker.z > 0.0) {
+    if (frame.marker_radius > 0.0) {
         s = draw_marker(vec2<f32>(p) + 0.5, s);
     }
     out_final[k] = pack4x8unorm(vec4<f32>(s, 1.0));

@@ -28,7 +28,7 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
     }
     let k = index_of(p);
     if (!covered(p)) {
-        out_resolved[k] = vec4<f32>(frame.background.rgb, 1.0);
+        out_resolved[k] = vec4<f32>(frame.background, 1.0);
         return;
     }
     let s = nearest[k];
@@ -45,7 +45,7 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
         out_resolved[k] = vec4<f32>(seed_color(s), 1.0);
         return;
     }
-    let j = clamp(i32(ceil(2.0 * sqrt(f32(d2)))), 1, max(i32(frame.temporal.w), 1));
+    let j = clamp(i32(ceil(2.0 * sqrt(f32(d2)))), 1, max(i32(frame.sibson_window), 1));
     let lo = max(p - vec2<i32>(j), vec2<i32>(0));
     let hi = min(p + vec2<i32>(j), frame_size() - 1);
     var sum = vec3<f32>(0.0);

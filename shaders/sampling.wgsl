@@ -4,32 +4,31 @@
 
 @group(0) @binding(1) var normal_distance: texture_2d<f32>;
 @group(0) @binding(2) var albedo_tex: texture_2d<f32>;
-@group(0) @binding(3) var<storage, read> materials: array<Material>;
-@group(0) @binding(4) var rank_map: texture_2d<f32>;
-@group(0) @binding(5) var<storage, read> history_color: array<vec4<f32>>;
-@group(0) @binding(6) var history_normal_distance: texture_2d<f32>;
-@group(0) @binding(7) var<storage, read_write> out_probability: array<f32>;
-@group(0) @binding(8) var<storage, read_write> out_flags: array<u32>;
-@group(0) @binding(9) var<storage, read_write> out_color: array<vec4<f32>>;
-@group(0) @binding(10) var<storage, read_write> out_seeds: array<u32>;
+@group(0) @binding(3) var rank_map: texture_2d<f32>;
+@group(0) @binding(4) var<storage, read> history_color: array<vec4<f32>>;
+@group(0) @binding(5) var history_normal_distance: texture_2d<f32>;
+@group(0) @binding(6) var<storage, read_write> out_probability: array<f32>;
+@group(0) @binding(7) var<storage, read_write> out_flags: array<u32>;
+@group(0) @binding(8) var<storage, read_write> out_color: array<vec4<f32>>;
+@group(0) @binding(9) var<storage, read_write> out_seeds: array<u32>;
 
 fn screen_point(p: vec2<f32>) -> vec3<f32> {
     let s = vec2<f32>(frame_size());
-    return vec3<f32>((p - 0.5 * s) * frame.viewing.x, frame.viewing.y);
+    return vec3<f32>((p - 0.5 * s) * frame.cm_per_pixel, frame.distance_cm);
 }
 
 // Degrees between the gaze and pixel centre p, seen from the eye; atan2 form, exact near 0.
 fn eccentricity_deg(p: vec2<f32>) -> f32 {
-    let a = screen_point(frame.gaze.xy);
+    let a = screen_point(frame.gaze_px);
     let b = screen_point(p);
     return degrees(atan2(length(cross(a, b)), dot(a, b)));
 }
 
 fn acuity_probability(w: f32) -> f32 {
-    let w_min = frame.viewing.z;
-    let w_far = frame.viewing.w;
+    let w_min = frame.w_min_deg;
+    let w_far = frame.w_far_deg;
     var p = 1.0;
-    if (frame.acuity.w < 0.5) {
+    if (frame.probability_form == PROBABILITY_LINEAR) {
         let span = w_far - w_min;
         if (span > 1e-12) {
             p = 1.0 - (w - w_min) / span;
@@ -128,7 +127,7 @@ fn saliency(local: vec2<i32>) -> f32 {
 }
 
 fn white_noise(p: vec2<u32>) -> f32 {
-    var h = p.x * 0x8da6b343u ^ p.y * 0xd8163841u ^ frame.size.z * 0xcb1ab31fu;
+    var h = p.x * 0x8da6b343u ^ p.y * 0xd8163841u ^ frame.frame_index * 0xcb1ab31fu;
     h = (h ^ (h >> 16u)) * 0x7feb352du;
     h = (h ^ (h >> 15u)) * 0x846ca68bu;
     h = h ^ (h >> 16u);
@@ -157,21 +156,21 @@ fn main(
     if (!covered) {
         out_probability[k] = 0.0;
         out_flags[k] = 0u;
-        out_color[k] = vec4<f32>(frame.background.rgb, INVALID_AGE);
+        out_color[k] = vec4<f32>(frame.background, INVALID_AGE);
         out_seeds[k] = NO_SEED;
         return;
     }
     let centre = vec2<f32>(p) + 0.5;
     // Where this surface point was on screen last frame (static geometry: only the camera moves).
-    let world = frame.eye.xyz + view_ray(centre) * nd.w;
+    let world = frame.eye + view_ray(centre) * nd.w;
     let prev_clip = frame.prev_view_proj * vec4<f32>(world, 1.0);
     var prev = vec2<f32>(-1e9);
     if (prev_clip.w > 1e-6) {
         let ndc = prev_clip.xy / prev_clip.w;
-        prev = vec2<f32>((ndc.x * 0.5 + 0.5) * f32(frame.size.x), (0.5 - ndc.y * 0.5) * f32(frame.size.y));
+        prev = vec2<f32>((ndc.x * 0.5 + 0.5) * f32(frame.width), (0.5 - ndc.y * 0.5) * f32(frame.height));
     }
     let e = eccentricity_deg(centre);
-    var f = acuity_probability(frame.acuity.x * e + frame.acuity.y);
+    var f = acuity_probability(frame.mar_slope * e + frame.mar_w0_deg);
     if (has_mode(MODE_SALIENCY) && f < 1.0) {
         f = max(f, saliency(vec2<i32>(local.xy)));
     }
@@ -181,21 +180,21 @@ fn main(
     }
     if (has_mode(MODE_DOF)) {
         // β ≈ A·|1/d_focus − 1/d|; a blur b pixels wide needs a sample every b pixels.
-        let metres = frame.eye.w;
+        let metres = frame.metres_per_unit;
         let focus = max(focus_distance(normal_distance) * metres, 1e-3);
         let d = max(nd.w * metres, 1e-3);
-        let blur_px = frame.gaze.z * 1e-3 * abs(1.0 / focus - 1.0 / d) / frame.temporal.z;
+        let blur_px = frame.pupil_mm * 1e-3 * abs(1.0 / focus - 1.0 / d) / frame.radians_per_pixel;
         if (blur_px > 1.0) {
             f = f / (blur_px * blur_px);
         }
     }
-    f = clamp(f, frame.acuity.z, 1.0);
+    f = clamp(f, frame.min_probability, 1.0);
 
     var threshold: f32;
     if (has_mode(MODE_WHITE_NOISE)) {
         threshold = white_noise(vec2<u32>(id.xy));
     } else {
-        let t = (vec2<u32>(id.xy) + frame.tile.xy) % vec2<u32>(64u);
+        let t = (vec2<u32>(id.xy) + frame.tile_offset) % vec2<u32>(64u);
         threshold = textureLoad(rank_map, vec2<i32>(t), 0).r;
     }
     let sampled = threshold < f;
@@ -205,16 +204,16 @@ fn main(
     if (sampled) {
         flags |= FLAG_SAMPLED;
         seed = pack_seed(p);
-    } else if (has_mode(MODE_REPROJECTION) && frame.prev_eye.w > 0.5) {
+    } else if (has_mode(MODE_REPROJECTION) && frame.has_history != 0u) {
         // Eq. 4 with |x| and a relative tolerance; the stored depth is last frame's Euclidean
         // distance from last frame's eye.
         let uv = prev / vec2<f32>(frame_size());
         if (all(uv >= vec2<f32>(0.0)) && all(uv < vec2<f32>(1.0))) {
             let q = vec2<i32>(floor(prev));
             let prev_distance = textureLoad(history_normal_distance, q, 0).w;
-            let now = distance(world, frame.prev_eye.xyz);
+            let now = distance(world, frame.prev_eye);
             let old = history_color[index_of(q)];
-            if (abs(prev_distance - now) < frame.temporal.y * max(now, 1e-6) && old.a < frame.temporal.x) {
+            if (abs(prev_distance - now) < frame.depth_epsilon * max(now, 1e-6) && old.a < f32(frame.max_history_age)) {
                 flags |= FLAG_REUSED;
                 seed = pack_seed(p);
                 color = vec4<f32>(old.rgb, old.a + 1.0);

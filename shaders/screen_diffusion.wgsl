@@ -24,8 +24,8 @@ fn irradiance(@builtin(global_invocation_id) id: vec3<u32>) {
     var e = vec3<f32>(0.0);
     if (a.a > 0.0) {
         let m = materials[material_id(a.a)];
-        let cos_i = dot(textureLoad(normal_distance, p, 0).xyz, frame.to_light.xyz);
-        e = frame.light.rgb * max(cos_i, 0.0) * fresnel_transmittance(m.eta, cos_i);
+        let cos_i = dot(textureLoad(normal_distance, p, 0).xyz, frame.to_light);
+        e = frame.light * max(cos_i, 0.0) * fresnel_transmittance(m.eta, cos_i);
     }
     dst[index_of(p)] = vec4<f32>(e, 1.0);
 }
@@ -41,7 +41,7 @@ fn blur(p: vec2<i32>, axis: vec2<i32>) {
     let m = materials[id];
     let d = textureLoad(normal_distance, p, 0).w;
     // Millimetres one pixel spans on the surface at this depth.
-    let footprint = d * frame.temporal.z * frame.photon.w;
+    let footprint = d * frame.radians_per_pixel * frame.mm_per_unit;
     let reach = reach_mm[id].x;
     let radius_px = min(reach / max(footprint, 1e-6), f32(MAX_TAPS) * 4.0);
     let step = max(1, i32(ceil(radius_px / f32(MAX_TAPS))));
@@ -58,7 +58,7 @@ fn blur(p: vec2<i32>, axis: vec2<i32>) {
             continue;
         }
         let dq = textureLoad(normal_distance, q, 0).w;
-        let r = length(vec2<f32>(f32(t * step) * footprint, (dq - d) * frame.photon.w));
+        let r = length(vec2<f32>(f32(t * step) * footprint, (dq - d) * frame.mm_per_unit));
         if (r > reach) {
             continue;
         }

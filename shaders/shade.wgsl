@@ -27,7 +27,7 @@
 
 // Index of the first node of pyramid level `level` (level 0: the photon map itself).
 fn level_offset(level: u32) -> u32 {
-    let n = u32(frame.photon.x);
+    let n = frame.photon_side;
     var offset = 0u;
     var side = n;
     for (var l = 0u; l < level; l++) {
@@ -38,7 +38,7 @@ fn level_offset(level: u32) -> u32 {
 }
 
 fn level_side(level: u32) -> u32 {
-    return max(u32(frame.photon.x) >> level, 1u);
+    return max(frame.photon_side >> level, 1u);
 }
 
 // Distance (mm) at which a cluster's R_d is evaluated. A photon stands for the light entering a
@@ -47,24 +47,24 @@ fn level_side(level: u32) -> u32 {
 // R_d's 1/r³ peak, which would turn a photon map coarser than the mean free path into dots.
 // CPU twin: optics::dipole::softened_distance.
 fn cluster_distance_mm(node: PhotonNode, x_o: vec3<f32>) -> f32 {
-    let r = distance(node.pos_extent.xyz, x_o) * frame.photon.w;
-    let soft = frame.photon.y; // set per frame: the photon radius in mm
+    let r = distance(node.pos_extent.xyz, x_o) * frame.mm_per_unit;
+    let soft = frame.photon_radius_mm; // set per frame: the photon radius in mm
     return sqrt(r * r + soft * soft);
 }
 
 // A single photon's softening: its texel's footprint stretched by the surface's slant under
 // the light (CPU twin: optics::dipole::leaf_softening).
 fn leaf_distance_mm(node: PhotonNode, x_o: vec3<f32>) -> f32 {
-    let r = distance(node.pos_extent.xyz, x_o) * frame.photon.w;
-    let radius = frame.photon.y;
-    let extent_mm = node.pos_extent.w * frame.photon.w;
+    let r = distance(node.pos_extent.xyz, x_o) * frame.mm_per_unit;
+    let radius = frame.photon_radius_mm;
+    let extent_mm = node.pos_extent.w * frame.mm_per_unit;
     let soft = max(sqrt(radius * extent_mm / (0.70710678 * 1.77245385)), radius);
     return sqrt(r * r + soft * soft);
 }
 
 // Σ R_d(|x_c − x_o|) Φ_c over every photon (eq. 8).
 fn gather_all(x_o: vec3<f32>, m: Material) -> vec3<f32> {
-    let n = u32(frame.photon.x);
+    let n = frame.photon_side;
     var sum = vec3<f32>(0.0);
     for (var i = 0u; i < n * n; i++) {
         let node = nodes[i];
@@ -77,9 +77,9 @@ fn gather_all(x_o: vec3<f32>, m: Material) -> vec3<f32> {
 
 // Σ R_d Φ over a cut through the pyramid (eq. 10), depth first from the start level.
 fn gather_cut(x_o: vec3<f32>, m: Material) -> vec3<f32> {
-    let start = u32(frame.photon.z);
-    let cut_level = u32(frame.cut.x);
-    let eps = frame.cut.y;
+    let start = frame.photon_start_level;
+    let cut_level = frame.cut_level;
+    let eps = frame.cut_epsilon;
     let roots = level_side(start) * level_side(start);
     var sum = vec3<f32>(0.0);
     var stack: array<vec2<u32>, 32>;
@@ -118,17 +118,17 @@ fn gather_cut(x_o: vec3<f32>, m: Material) -> vec3<f32> {
 
 fn shade(p: vec2<i32>) {
     let a = textureLoad(albedo_tex, p, 0);
-    var rgb = frame.background.rgb;
+    var rgb = frame.background;
     if (a.a > 0.0) {
         let nd = textureLoad(normal_distance, p, 0);
         let m = materials[material_id(a.a)];
-        let ambient = m.albedo.rgb * frame.light.rgb * frame.albedo_ambient.w;
-        let l = frame.to_light.xyz;
+        let ambient = m.albedo.rgb * frame.light * frame.ambient;
+        let l = frame.to_light;
         let v = -view_ray(vec2<f32>(p) + 0.5);
         let cos_i = dot(nd.xyz, l);
         let ft_out = fresnel_transmittance(m.eta, dot(nd.xyz, v));
-        var rung = u32(frame.cut.z);
-        if (m.subsurface == 0u || (rung >= RUNG_HIERARCHICAL && frame.cut.w < 0.5)) {
+        var rung = frame.rung;
+        if (m.subsurface == 0u || (rung >= RUNG_HIERARCHICAL && frame.pyramid_ready == 0u)) {
             rung = RUNG_OPAQUE;
         }
         // Radiosity's irradiance (direct from area lights + interreflected); zero without it.
@@ -139,16 +139,16 @@ fn shade(p: vec2<i32>) {
         } else if (m.kind == 0u) {
             rgb = lambert(nd.xyz, m.albedo.rgb) + m.albedo.rgb * gi;
         } else if (rung == RUNG_OPAQUE) {
-            rgb = m.albedo.rgb * (frame.light.rgb * max(cos_i, 0.0) * fresnel_transmittance(m.eta, cos_i) + gi) * ft_out + ambient;
+            rgb = m.albedo.rgb * (frame.light * max(cos_i, 0.0) * fresnel_transmittance(m.eta, cos_i) + gi) * ft_out + ambient;
         } else if (rung == RUNG_NORMAL_BLUR) {
             let nb = textureLoad(blurred_normal_tex, p, 0).xyz * 2.0 - 1.0;
             let len = max(length(nb), 1e-6);
             let cos_b = dot(nb, l);
-            rgb = m.albedo.rgb * (frame.light.rgb * max(cos_b, 0.0) * fresnel_transmittance(m.eta, cos_b / len) + gi) * ft_out + ambient;
+            rgb = m.albedo.rgb * (frame.light * max(cos_b, 0.0) * fresnel_transmittance(m.eta, cos_b / len) + gi) * ft_out + ambient;
         } else if (rung == RUNG_SCREEN) {
             rgb = m.albedo.rgb * (diffused[index_of(p)].rgb + gi) * ft_out + ambient;
         } else {
-            let x_o = frame.eye.xyz + view_ray(vec2<f32>(p) + 0.5) * nd.w;
+            let x_o = frame.eye + view_ray(vec2<f32>(p) + 0.5) * nd.w;
             var sum: vec3<f32>;
             if (rung == RUNG_BRUTE_FORCE) {
                 sum = gather_all(x_o, m);

@@ -3,13 +3,27 @@
 //! A client sends gaze samples over one WebSocket; a headless wgpu renderer draws the scene for
 //! the newest sample and the server streams encoded frames back. The modules, by concern:
 //!
-//! - [`protocol`]: wire messages, their validation and the limits a server states (no tokio, no wgpu).
-//! - [`scene`]: scene descriptions, PLY meshes, cameras and lights.
+//! - [`viewing`]: viewing geometry, once: display size and distance, degrees per pixel, field
+//!   of view, gaze in pixels. A leaf.
+//! - [`settings`]: typed presets, render and session settings, and the knob list declared once
+//!   (wire, command line, docs). A leaf.
+//! - [`protocol`]: wire messages, their validation and the limits a server states (no tokio, no
+//!   wgpu; imports neither foveation, render nor radiosity).
+//! - [`scene`]: scene descriptions, PLY meshes, cameras, lights, and the scene plan.
 //! - [`optics`]: CPU twins of the numbers the shaders compute, for reference tests.
-//! - [`render`]: the headless GPU device, one file per pass, and the render thread that owns it.
+//! - [`foveation`]: CPU twins of sampling, reprojection and reconstruction; the blue-noise map.
+//! - [`radiosity`]: the progressive radiosity solver that runs beside the renderer.
+//! - [`render`]: the headless GPU device, the frame graph, one file per pass, and the render
+//!   thread that owns it (imports neither protocol nor server).
 //! - [`encode`]: JPEG and PNG encoding of read-back frames.
-//! - [`server`]: the axum app: static page, `/ws` sessions, health.
-//! - [`client`]: a Rust WebSocket client speaking the protocol (tests now, replay and load later).
+//! - [`quality`]: PSNR, SSIM, FLIP and acuity-weighted pooling of frame errors.
+//! - [`gaze`]: eye-tracker recordings, the synthetic eye, prediction and its evaluation.
+//! - [`server`]: the axum app: static page, `/ws` sessions, health and metrics.
+//! - [`client`]: a Rust WebSocket client speaking the protocol (tests, replay, load).
+//! - [`bench`]: the speed/accuracy sweep behind `fovea bench`.
+//!
+//! The arrows between them point one way; `tests/boundaries.rs` fails on a forbidden one and
+//! `docs/architecture.md` draws them.
 
 pub mod bench;
 pub mod client;
@@ -23,3 +37,5 @@ pub mod radiosity;
 pub mod render;
 pub mod scene;
 pub mod server;
+pub mod settings;
+pub mod viewing;

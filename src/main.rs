@@ -16,7 +16,7 @@ use fovea::render::{FrameRequest, RenderThread, Renderer};
 use cli::bench::{bench, BenchArgs};
 use cli::gaze::{gaze, replay, GazeArgs, ReplayArgs};
 use cli::load::{load, LoadArgs};
-use cli::parse::{parse_enum, parse_gaze, parse_vec3};
+use cli::parse::{parse_gaze, parse_vec3};
 use cli::radiosity::{radiosity, RadiosityArgs};
 
 #[derive(Parser)]
@@ -87,9 +87,9 @@ enum Command {
         /// JPEG quality 1–100.
         #[arg(long, default_value_t = 90, value_parser = clap::value_parser!(u8).range(1..=100))]
         quality: u8,
-        /// Quality preset: reference, full, quality, balanced, fast.
-        #[arg(long, default_value = "full")]
-        preset: String,
+        /// Quality preset.
+        #[arg(long, value_enum, default_value_t = fovea::settings::Preset::Full)]
+        preset: fovea::settings::Preset,
         /// Frames to render before writing the last one.
         #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..=10000))]
         frames: u32,
@@ -102,8 +102,9 @@ enum Command {
         /// Viewing distance, cm.
         #[arg(long, default_value_t = 60.0)]
         distance_cm: f64,
+        /// Single-knob overrides: the protocol's `settings` knobs (docs/protocol.md).
         #[command(flatten)]
-        knobs: Knobs,
+        knobs: fovea::settings::SettingsPatch,
     },
     /// Measure every preset and knob: frame time, per-pass GPU time, encode cost and the error
     /// against the reference render of the same frame; writes bench.json, bench.md, bench.svg.
@@ -131,92 +132,6 @@ enum Command {
     /// result against direct light only and radiosity off; writes DIR/radiosity.json, .md and
     /// the direct / with-radiosity images.
     Radiosity(RadiosityArgs),
-}
-
-/// Single-knob overrides, the same names as the protocol's `settings` message.
-#[derive(clap::Args)]
-struct Knobs {
-    /// Foveated sampling on or off.
-    #[arg(long)]
-    foveation: Option<bool>,
-    /// MAR slope m (degrees per degree of eccentricity).
-    #[arg(long)]
-    mar_slope: Option<f64>,
-    /// MAR at the fovea w0, degrees.
-    #[arg(long)]
-    mar_w0_deg: Option<f64>,
-    /// Minimum sampling probability ξ in [0, 1].
-    #[arg(long)]
-    min_probability: Option<f64>,
-    /// Probability form: linear (thesis eq. 2) or density ((w_min/w)²).
-    #[arg(long, value_parser = parse_enum::<fovea::optics::acuity::ProbabilityForm>)]
-    probability: Option<fovea::optics::acuity::ProbabilityForm>,
-    #[arg(long)]
-    saliency: Option<bool>,
-    #[arg(long)]
-    motion: Option<bool>,
-    /// blue (WSE rank map) or white.
-    #[arg(long, value_parser = parse_enum::<fovea::foveation::Noise>)]
-    noise: Option<fovea::foveation::Noise>,
-    #[arg(long)]
-    reprojection: Option<bool>,
-    #[arg(long)]
-    max_history_age: Option<u32>,
-    /// nearest or sibson.
-    #[arg(long, value_parser = parse_enum::<fovea::foveation::Reconstruction>)]
-    reconstruction: Option<fovea::foveation::Reconstruction>,
-    /// Sibson window bound in pixels (0: from ξ).
-    #[arg(long)]
-    sibson_window: Option<u32>,
-    #[arg(long)]
-    compaction: Option<bool>,
-    /// Translucency rung: opaque, normal_blur, screen, hierarchical, brute_force.
-    #[arg(long, value_parser = parse_enum::<fovea::foveation::Rung>)]
-    translucency: Option<fovea::foveation::Rung>,
-    /// Finest photon-pyramid level a cluster may come from (0–6; 0: single photons).
-    #[arg(long)]
-    cut_level: Option<u32>,
-    /// Use a cluster whole when its extent < ε × its distance.
-    #[arg(long)]
-    cut_epsilon: Option<f64>,
-    /// Blur by the eye's depth of field.
-    #[arg(long)]
-    dof: Option<bool>,
-    /// none, samples or probability.
-    #[arg(long, value_parser = parse_enum::<fovea::foveation::settings::Overlay>)]
-    overlay: Option<fovea::foveation::settings::Overlay>,
-    /// In scenes with radiosity: add interreflected light (false: area lights' direct light only).
-    #[arg(long)]
-    indirect: Option<bool>,
-}
-
-impl Knobs {
-    fn patch(&self) -> fovea::protocol::SettingsPatch {
-        fovea::protocol::SettingsPatch {
-            preset: None,
-            indirect: self.indirect,
-            foveation: self.foveation,
-            mar_slope: self.mar_slope,
-            mar_w0_deg: self.mar_w0_deg,
-            min_probability: self.min_probability,
-            probability: self.probability,
-            saliency: self.saliency,
-            motion: self.motion,
-            noise: self.noise,
-            reprojection: self.reprojection,
-            max_history_age: self.max_history_age,
-            reconstruction: self.reconstruction,
-            sibson_window: self.sibson_window,
-            compaction: self.compaction,
-            translucency: self.translucency,
-            cut_level: self.cut_level,
-            cut_epsilon: self.cut_epsilon,
-            dof: self.dof,
-            overlay: self.overlay,
-            prediction: None,
-            prediction_horizon_ms: None,
-        }
-    }
 }
 
 fn main() -> Result<()> {
@@ -284,19 +199,7 @@ fn main() -> Result<()> {
                 return Ok(());
             }
             let out = out.context("--out is required")?;
-            let mut settings = fovea::foveation::Settings::preset(&preset).with_context(|| {
-                format!(
-                    "unknown preset {preset:?}; available: {}",
-                    fovea::foveation::PRESETS.join(", ")
-                )
-            })?;
-            let patch = knobs.patch();
             let limits = fovea::protocol::Limits::default();
-            // The same validation a `settings` message gets.
-            let mut msg = serde_json::to_value(&patch)?;
-            msg["type"] = "settings".into();
-            fovea::protocol::parse_client_message(&msg.to_string(), &limits)
-                .map_err(|e| anyhow::anyhow!("{}", e.message))?;
             if !(limits.pupil_mm[0]..=limits.pupil_mm[1]).contains(&f64::from(pupil_mm)) {
                 bail!(
                     "--pupil-mm {pupil_mm} is outside [{}, {}]",
@@ -304,16 +207,17 @@ fn main() -> Result<()> {
                     limits.pupil_mm[1]
                 );
             }
-            settings
-                .apply(&patch)
-                .map_err(|p| anyhow::anyhow!("unknown preset {p}"))?;
+            // The same checks a `settings` message gets.
+            let mut settings = fovea::settings::Settings::of(preset);
+            settings.apply(&knobs)?;
+            eprintln!("preset {}", settings.label());
             let mut request = FrameRequest::new(&scene, width, height);
             request.gaze = gaze;
             request.marker = !no_marker;
             request.to_light = light;
-            request.settings = settings;
+            request.settings = settings.render;
             request.pupil_mm = pupil_mm;
-            request.display = fovea::protocol::Display {
+            request.display = fovea::viewing::Display {
                 width_cm: display_width_cm,
                 distance_cm,
             };
@@ -396,7 +300,7 @@ fn render(
     let mut renderer = Renderer::new().context("opening the GPU")?;
     eprintln!("adapter: {}", renderer.adapter());
     if let Some(scene) = own {
-        renderer.add_scene(scene);
+        renderer.add_scene(scene)?;
     }
     // A still image shows the converged solution; the server streams the refining preview.
     if let Some(solve) = renderer.radiosity(&request.scene)? {
@@ -449,12 +353,11 @@ fn render(
         eprintln!("GPU ms per pass: {}", passes.join(", "));
     }
     eprintln!(
-        "wrote {} ({}x{}, {} bytes, preset {}, sampled {:.1}%): render {:.2} ms, readback {:.2} ms, encode {:.2} ms",
+        "wrote {} ({}x{}, {} bytes, sampled {:.1}%): render {:.2} ms, readback {:.2} ms, encode {:.2} ms",
         out.display(),
         frame.width,
         frame.height,
         bytes.len(),
-        request.settings.preset,
         frame.sampled * 100.0,
         frame.render_ms,
         frame.readback_ms,

@@ -128,7 +128,7 @@ fn against_ground_truth_compares_the_reference_rung_and_every_configuration() {
     // Ground truth that is exactly our reference render: the reference must then score
     // perfectly against it, and every configuration exactly as against the reference.
     let mut req = fovea::render::FrameRequest::new("bunny-marble", 48, 32);
-    req.settings = fovea::foveation::Settings::preset("reference").unwrap();
+    req.settings = fovea::settings::RenderSettings::of(fovea::settings::Preset::Reference);
     let frame = renderer.render(&req).unwrap();
     let dir = std::env::temp_dir().join(format!("fovea-truth-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();

@@ -2,8 +2,9 @@
 
 use fovea::foveation::rank_map;
 use fovea::foveation::reconstruct::{jfa_with_steps, reconstruct, unpack, NO_SEED};
-use fovea::foveation::{Noise, Reconstruction, Settings};
-use fovea::optics::acuity::{acuity_probability, mar_deg, ProbabilityForm, Viewing};
+use fovea::settings::{Noise, Reconstruction};
+use fovea::optics::acuity::{acuity_probability, mar_deg, ProbabilityForm};
+use fovea::viewing::Viewing;
 use fovea::render::uniforms::{FLAG_COVERED, FLAG_REUSED, FLAG_SAMPLED};
 use fovea::render::{FrameRequest, Inspection, Renderer};
 use fovea::scene::Scene;
@@ -14,7 +15,7 @@ fn renderer() -> Renderer {
 
 fn foveated(preset: &str, w: u32, h: u32, gaze: [f32; 2]) -> FrameRequest {
     let mut r = FrameRequest::new("bunny", w, h);
-    r.settings = Settings::preset(preset).unwrap();
+    r.settings = fovea::settings::RenderSettings::of(fovea::settings::Preset::from_name(preset).unwrap());
     r.gaze = gaze;
     r
 }
@@ -137,10 +138,12 @@ fn gpu_jump_flooding_and_resolve_match_the_cpu_twins() {
         req.stream = 7;
         r.render(&req).unwrap();
         let img = inspect(&r, &req);
-        let steps = req
-            .settings
-            .foveation
-            .jfa_steps(w, h, fovea::render::MIN_XI);
+        let steps = fovea::foveation::reconstruct::frame_jfa_steps(
+            w,
+            h,
+            req.settings.foveation.min_probability,
+            fovea::render::MIN_XI,
+        );
         let cpu_nearest = jfa_with_steps(w, h, &img.seeds, &steps);
         assert_eq!(img.nearest, cpu_nearest, "JFA: GPU and CPU differ");
         let covered: Vec<bool> = img.flags.iter().map(|f| f & FLAG_COVERED != 0).collect();

@@ -81,7 +81,7 @@ async fn a_recorded_session_replays_to_the_same_frames() {
     let (url, shutdown) = server(Some(dir.clone())).await;
     let synthetic = fovea::gaze::synthetic::generate(
         5,
-        &fovea::optics::acuity::Viewing {
+        &fovea::viewing::Viewing {
             width: 96,
             height: 64,
             width_cm: 53.0,

@@ -3,7 +3,6 @@
 
 use std::time::Duration;
 
-use fovea::foveation::Settings;
 use fovea::render::{FrameRequest, Inspection, Renderer};
 
 fn renderer() -> Renderer {
@@ -19,7 +18,7 @@ fn frame(
     stream: u64,
 ) -> (Inspection, fovea::render::RenderedFrame) {
     let mut req = FrameRequest::new("cornell", W, H);
-    req.settings = Settings::preset("full").unwrap();
+    req.settings = fovea::settings::RenderSettings::of(fovea::settings::Preset::Full);
     req.settings.indirect = indirect;
     req.stream = stream;
     req.marker = false;
@@ -113,6 +112,6 @@ fn renderers_share_one_solve_and_open_scenes_have_none() {
         assert!(a.radiosity(open).unwrap().is_none(), "{open}");
     }
     let mut req = FrameRequest::new("bunny-marble", 32, 24);
-    req.settings = Settings::preset("fast").unwrap();
+    req.settings = fovea::settings::RenderSettings::of(fovea::settings::Preset::Fast);
     assert!(a.render(&req).unwrap().radiosity.is_none());
 }

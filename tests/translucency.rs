@@ -1,7 +1,7 @@
 //! The translucency ladder on the GPU: the dipole held to its CPU twin, the hierarchy to brute
 //! force, energy bounded, the pyramid cached, and every rung composed with foveation.
 
-use fovea::foveation::{Rung, Settings};
+use fovea::settings::Rung;
 use fovea::optics::dipole::{fresnel_transmittance, leaf_softening, softened_distance};
 use fovea::render::pass::photons::photon_radius_mm;
 use fovea::render::{FrameRequest, Inspection, Renderer};
@@ -14,7 +14,7 @@ fn renderer() -> Renderer {
 
 fn request(scene: &str, w: u32, h: u32, rung: Rung, stream: u64) -> FrameRequest {
     let mut r = FrameRequest::new(scene, w, h);
-    r.settings = Settings::preset("full").unwrap();
+    r.settings = fovea::settings::RenderSettings::of(fovea::settings::Preset::Full);
     r.settings.translucency.rung = rung;
     r.stream = stream;
     r
@@ -150,7 +150,7 @@ fn no_rung_makes_a_white_non_absorbing_medium_brighter_than_the_light() {
     let scene = white_scene(0.0);
     let name = scene.name().to_string();
     let ambient = scene.file.ambient;
-    r.add_scene(scene);
+    r.add_scene(scene).unwrap();
     for (i, rung) in Rung::ALL.iter().enumerate() {
         let img = render(&mut r, &request(&name, 96, 72, *rung, i as u64 + 1));
         let brightest = img
@@ -182,7 +182,7 @@ fn the_pyramid_is_built_once_for_a_static_light_and_every_frame_for_a_moving_one
     assert_eq!(r.pyramid_builds(), 1, "static scene: built once");
     let moving = white_scene(45.0);
     let name = moving.name().to_string();
-    r.add_scene(moving);
+    r.add_scene(moving).unwrap();
     q.scene = name;
     for t in 0..3 {
         q.time_s = f64::from(t);
@@ -203,7 +203,7 @@ fn every_rung_composes_with_foveation() {
     for (i, rung) in Rung::ALL.iter().enumerate() {
         let full = render(&mut r, &request("bunny-skin", w, h, *rung, 100 + i as u64));
         let mut fov = request("bunny-skin", w, h, *rung, 200 + i as u64);
-        fov.settings = Settings::preset("balanced").unwrap();
+        fov.settings = fovea::settings::RenderSettings::of(fovea::settings::Preset::Balanced);
         fov.settings.translucency.rung = *rung;
         fov.settings.foveation.min_probability = 1.0;
         let all = render(&mut r, &fov);

@@ -2,14 +2,14 @@
 
 use serde::{Deserialize, Serialize};
 
-use crate::foveation::{Noise, Reconstruction, Rung, Settings};
+use crate::settings::{Noise, Preset, Reconstruction, RenderSettings, Rung};
 use crate::optics::acuity::ProbabilityForm;
 use crate::protocol::Codec;
 
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct BenchConfig {
     pub name: String,
-    pub settings: Settings,
+    pub settings: RenderSettings,
     pub codec: Codec,
     pub quality: u8,
 }
@@ -18,20 +18,19 @@ impl BenchConfig {
     fn preset(name: &str) -> Option<BenchConfig> {
         Some(BenchConfig {
             name: name.to_string(),
-            settings: Settings::preset(name)?,
+            settings: RenderSettings::of(Preset::from_name(name)?),
             codec: Codec::Jpeg,
             quality: 85,
         })
     }
 
-    fn variant(name: String, tweak: impl FnOnce(&mut Settings)) -> BenchConfig {
+    fn variant(name: String, tweak: impl FnOnce(&mut RenderSettings)) -> BenchConfig {
         BenchConfig::variant_of("balanced", name, tweak)
     }
 
-    fn variant_of(preset: &str, name: String, tweak: impl FnOnce(&mut Settings)) -> BenchConfig {
+    fn variant_of(preset: &str, name: String, tweak: impl FnOnce(&mut RenderSettings)) -> BenchConfig {
         let mut c = BenchConfig::preset(preset).expect("a preset");
         tweak(&mut c.settings);
-        c.settings.preset = name.clone();
         c.name = name;
         c
     }
@@ -42,9 +41,9 @@ impl BenchConfig {
 /// probability form, saliency, reprojection, reconstruction, noise, compaction) and the
 /// encoder. Any other value is a comma-separated list of names from `knobs`.
 pub fn sweep(which: &str) -> Result<Vec<BenchConfig>, String> {
-    let presets: Vec<BenchConfig> = crate::foveation::PRESETS
+    let presets: Vec<BenchConfig> = Preset::ALL
         .iter()
-        .filter_map(|p| BenchConfig::preset(p))
+        .filter_map(|p| BenchConfig::preset(p.name()))
         .collect();
     let mut rungs = Vec::new();
     for rung in [Rung::Opaque, Rung::NormalBlur, Rung::Screen] {

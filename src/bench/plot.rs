@@ -53,7 +53,7 @@ pub fn svg(report: &BenchReport) -> String {
             (
                 Vec::new(),
                 Vec::new(),
-                crate::foveation::PRESETS.contains(&r.config.as_str()),
+                crate::settings::Preset::from_name(&r.config).is_some(),
             )
         });
         e.0.push(r.frame_ms.median);

@@ -6,7 +6,7 @@ use std::path::Path;
 
 use serde::{Deserialize, Serialize};
 
-use crate::foveation::Settings;
+use crate::settings::RenderSettings;
 use crate::protocol::{Codec, Display};
 use crate::quality::Errors;
 
@@ -46,7 +46,7 @@ pub struct BenchRecord {
     pub height: u32,
     pub gaze: [f32; 2],
     pub moving_gaze: bool,
-    pub settings: Settings,
+    pub settings: RenderSettings,
     pub codec: Codec,
     pub quality: u8,
     pub frames: usize,

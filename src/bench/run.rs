@@ -8,8 +8,8 @@ use std::time::Instant;
 use super::configs::BenchConfig;
 use super::report::{BenchRecord, BenchReport, Machine, Spread};
 use crate::encode;
-use crate::foveation::Settings;
-use crate::optics::acuity::Viewing;
+use crate::settings::{Preset, RenderSettings};
+use crate::viewing::Viewing;
 use crate::protocol::Display;
 use crate::quality::{self, Errors, Weighting};
 use crate::render::{FrameRequest, RenderError, Renderer};
@@ -80,7 +80,7 @@ pub fn run(
     let mut records = Vec::new();
     let mut reference_truth = Vec::new();
     let mut interrupted = false;
-    let reference = Settings::preset("reference").expect("reference is a preset");
+    let reference = RenderSettings::of(Preset::Reference);
     for (gi, (scene, (w, h), gaze0)) in groups.iter().enumerate() {
         let viewing = Viewing {
             width: *w,
@@ -98,7 +98,7 @@ pub fn run(
         'frames: for f in 0..opts.warmup + opts.frames {
             let gaze = gaze_at(*gaze0, opts.moving, f);
             let measured = f >= opts.warmup;
-            let request = |settings: &Settings, stream: u64| {
+            let request = |settings: &RenderSettings, stream: u64| {
                 let mut r = FrameRequest::new(scene, *w, *h);
                 r.gaze = gaze;
                 r.settings = settings.clone();

@@ -186,7 +186,7 @@ pub fn gaze(a: GazeArgs) -> Result<()> {
         .map(parse_size)
         .transpose()?
         .unwrap_or((1920, 1080));
-    let viewing = fovea::optics::acuity::Viewing {
+    let viewing = fovea::viewing::Viewing {
         width: w,
         height: h,
         width_cm: a.display_width_cm,

@@ -6,7 +6,7 @@ use std::time::{Duration, Instant};
 
 use anyhow::{bail, Context, Result};
 
-use fovea::foveation::Settings;
+use fovea::settings::{Preset, RenderSettings};
 use fovea::radiosity::{Options, Solver, Stats};
 use fovea::render::{FrameRequest, Renderer};
 use fovea::scene::{Plan, RadiosityMode, Scene};
@@ -124,7 +124,7 @@ pub fn radiosity(a: RadiosityArgs) -> Result<()> {
         if let Some(r) = off.radiosity.as_mut() {
             r.mode = RadiosityMode::Off;
         }
-        renderer.add_scene(Scene::from_json(&serde_json::to_string(&off)?)?);
+        renderer.add_scene(Scene::from_json(&serde_json::to_string(&off)?)?)?;
         let configs = [
             ("radiosity (cached)", a.scene.as_str(), true),
             ("direct light only", a.scene.as_str(), false),
@@ -133,7 +133,7 @@ pub fn radiosity(a: RadiosityArgs) -> Result<()> {
         for preset in ["full", "balanced"] {
             for (k, (label, name, indirect)) in configs.iter().enumerate() {
                 let mut req = FrameRequest::new(name, w, h);
-                req.settings = Settings::preset(preset).context("preset")?;
+                req.settings = RenderSettings::of(Preset::from_name(preset).context("preset")?);
                 req.settings.indirect = *indirect;
                 req.marker = false;
                 req.stream = 100 + k as u64;

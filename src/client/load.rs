@@ -13,7 +13,7 @@ use serde::Serialize;
 use tokio_tungstenite::tungstenite::Message;
 
 use crate::gaze::synthetic::{degrees_to_frame, SyntheticEye};
-use crate::optics::acuity::Viewing;
+use crate::viewing::Viewing;
 use crate::protocol::{decode_frame, Hello};
 
 #[derive(Debug, Clone)]

@@ -24,6 +24,18 @@ fn dist2(s: u32, x: i32, y: i32) -> i64 {
     dx * dx + dy * dy
 }
 
+/// Jump sizes of a frame's JFA passes: fewer when ξ (never below `min_xi`) bounds the holes.
+/// The count keeps the parity of the full list, so the extra unit step the full list would end
+/// on is kept (it refines the result) and frames stay comparable across ξ.
+pub fn frame_jfa_steps(width: u32, height: u32, min_probability: f32, min_xi: f32) -> Vec<u32> {
+    let full = jfa_steps(width, height);
+    let mut steps = jfa_steps_within(width, height, max_gap_for(min_probability.max(min_xi)));
+    if steps.len() % 2 != full.len() % 2 {
+        steps.push(1);
+    }
+    steps
+}
+
 /// Jump sizes: N/2, N/4, …, 1 with N the power of two ≥ the larger side, then one more pass of
 /// step 1 ("JFA+1", Rong & Tan 2006), which removes most of plain JFA's rare errors.
 pub fn jfa_steps(width: u32, height: u32) -> Vec<u32> {

@@ -4,7 +4,7 @@
 
 use super::prediction::Predictor;
 use super::Sample;
-use crate::optics::acuity::Viewing;
+use crate::viewing::Viewing;
 
 #[derive(Debug, Clone, PartialEq, serde::Serialize)]
 pub struct HorizonError {
@@ -25,23 +25,9 @@ fn percentile(v: &mut [f64], q: f64) -> f64 {
     v[((q * (v.len() - 1) as f64).round() as usize).min(v.len() - 1)]
 }
 
-/// Angle in degrees between two normalised frame positions seen from the eye.
-fn angle(v: &Viewing, a: [f64; 2], b: [f64; 2]) -> f64 {
-    let px = |p: [f64; 2]| [p[0] * f64::from(v.width), p[1] * f64::from(v.height)];
-    v.eccentricity_deg(px(a), px(b))
-}
 
 pub fn evaluate(samples: &[Sample], viewing: &Viewing, horizons: &[f64]) -> Vec<HorizonError> {
-    let frame_deg = [
-        2.0 * (0.5 * viewing.width_cm / viewing.distance_cm)
-            .atan()
-            .to_degrees(),
-        2.0 * (0.5 * viewing.width_cm * f64::from(viewing.height)
-            / f64::from(viewing.width.max(1))
-            / viewing.distance_cm)
-            .atan()
-            .to_degrees(),
-    ];
+    let frame_deg = viewing.field_of_view_deg();
     let mut out = Vec::new();
     for &h in horizons {
         // (class, hold error, predicted error)
@@ -68,8 +54,8 @@ pub fn evaluate(samples: &[Sample], viewing: &Viewing, horizons: &[f64]) -> Vec<
             let saccade = predictor.in_saccade();
             errors.push((
                 saccade,
-                angle(viewing, xy, future),
-                angle(viewing, predicted, future),
+                viewing.angle_deg(xy, future),
+                viewing.angle_deg(predicted, future),
             ));
         }
         for (class, want) in [("fixation", false), ("saccade", true)] {

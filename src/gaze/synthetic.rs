@@ -6,7 +6,7 @@
 //! mapped to the frame through the viewing geometry.
 
 use super::Sample;
-use crate::optics::acuity::Viewing;
+use crate::viewing::Viewing;
 
 /// Saccade duration from amplitude (Carpenter 1988): D = 2.2·A + 21 ms.
 pub fn saccade_duration_ms(amplitude_deg: f64) -> f64 {
@@ -89,13 +89,8 @@ pub struct SyntheticEye {
 
 impl SyntheticEye {
     pub fn new(seed: u32, viewing: &Viewing) -> SyntheticEye {
-        let half_w = (0.5 * viewing.width_cm / viewing.distance_cm)
-            .atan()
-            .to_degrees();
-        let aspect = f64::from(viewing.height) / f64::from(viewing.width.max(1));
-        let half_h = (0.5 * viewing.width_cm * aspect / viewing.distance_cm)
-            .atan()
-            .to_degrees();
+        let [fov_w, fov_h] = viewing.field_of_view_deg();
+        let (half_w, half_h) = (0.5 * fov_w, 0.5 * fov_h);
         let mut rng = Rng::new(seed);
         let next_blink_ms = rng.range(2000.0, 6000.0);
         SyntheticEye {
@@ -351,7 +346,7 @@ mod tests {
             }
         }
         // Saccades: some sample-to-sample jumps over 100°/s; fixations: most under 30°/s.
-        let deg_per_frame = 2.0 * (0.5 * v.width_cm / v.distance_cm).atan().to_degrees();
+        let deg_per_frame = v.field_of_view_deg()[0];
         let speeds: Vec<f64> = samples
             .windows(2)
             .filter_map(|w| {

@@ -4,80 +4,14 @@
 //!
 //! Units: angles in degrees unless a name says radians; display sizes in centimetres.
 
-/// Physical viewing geometry of the frame as the viewer sees it.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Viewing {
-    /// Frame size in pixels.
-    pub width: u32,
-    pub height: u32,
-    /// Physical width of the displayed frame and the eye's distance from it (on its axis,
-    /// through the frame centre).
-    pub width_cm: f64,
-    pub distance_cm: f64,
-}
 
-impl Viewing {
-    fn cm_per_px(&self) -> f64 {
-        self.width_cm / f64::from(self.width.max(1))
-    }
-
-    /// Point on the screen (cm, eye at the origin looking down +z) of pixel coordinates (x, y),
-    /// where (0, 0) is the top-left corner of the frame.
-    fn screen_point(&self, x: f64, y: f64) -> [f64; 3] {
-        let s = self.cm_per_px();
-        [
-            (x - 0.5 * f64::from(self.width)) * s,
-            (y - 0.5 * f64::from(self.height)) * s,
-            self.distance_cm,
-        ]
-    }
-
-    /// Angle between the gaze and a pixel as seen from the eye, in degrees. Uses atan2 of the
-    /// cross and dot products: acos of the normalised dot loses all precision near e = 0.
-    pub fn eccentricity_deg(&self, gaze_px: [f64; 2], px: [f64; 2]) -> f64 {
-        let a = self.screen_point(gaze_px[0], gaze_px[1]);
-        let b = self.screen_point(px[0], px[1]);
-        let cross = [
-            a[1] * b[2] - a[2] * b[1],
-            a[2] * b[0] - a[0] * b[2],
-            a[0] * b[1] - a[1] * b[0],
-        ];
-        let cross_len = (cross[0] * cross[0] + cross[1] * cross[1] + cross[2] * cross[2]).sqrt();
-        let dot = a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
-        cross_len.atan2(dot).to_degrees()
-    }
-
-    /// The angle one pixel subtends at the centre of the display: the finest detail the display
-    /// can show, `w_min` of the thesis.
-    pub fn pixel_angle_deg(&self) -> f64 {
-        (2.0 * (0.5 * self.cm_per_px() / self.distance_cm).atan()).to_degrees()
-    }
-
-    /// The largest eccentricity any pixel of the frame has for this gaze (one of the corners).
-    pub fn max_eccentricity_deg(&self, gaze_px: [f64; 2]) -> f64 {
-        let (w, h) = (f64::from(self.width), f64::from(self.height));
-        [[0.0, 0.0], [w, 0.0], [0.0, h], [w, h]]
-            .iter()
-            .map(|c| self.eccentricity_deg(gaze_px, *c))
-            .fold(0.0, f64::max)
-    }
-}
 
 /// Linear MAR model (Strasburger; thesis Fig. 12): w(e) = m·e + w0, in degrees.
 pub fn mar_deg(e_deg: f64, slope: f64, w0_deg: f64) -> f64 {
     slope * e_deg + w0_deg
 }
 
-/// How the MAR becomes a sampling probability.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
-#[serde(rename_all = "snake_case")]
-pub enum ProbabilityForm {
-    /// Thesis eq. 2 with the digest's normalisation: 1 − (w − w_min)/(w_far − w_min), falling
-    /// linearly from 1 where the eye resolves a pixel to 0 at the frame's farthest point.
-    Linear,
-    /// Sample density matched to acuity: (w_min / w)², one sample per resolvable cell.
-    Density,
-}
+pub use crate::settings::ProbabilityForm;
 
 /// Sampling probability before saliency and depth of field, in [0, 1]. Guards: a display
 /// coarser than the eye everywhere (`w_far ≤ w_min`) samples fully; a zero or negative MAR
@@ -130,6 +64,7 @@ pub fn dof_factor(blur_px: f64) -> f64 {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::viewing::Viewing;
 
     fn view() -> Viewing {
         Viewing {

@@ -50,7 +50,20 @@ pub struct FrameHeader {
     /// In scenes with radiosity: the snapshot of the solve this frame was lit by. Until it
     /// converges the frame shows the preview (unshot energy spread as an ambient term).
     #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub radiosity: Option<crate::radiosity::Progress>,
+    pub radiosity: Option<SolveProgress>,
+}
+
+/// Where a scene's radiosity solve stood when a frame used it (the wire's own type; the
+/// server fills it from the solver's progress).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct SolveProgress {
+    /// Shooting steps so far.
+    pub shots: u32,
+    /// Receiving elements after adaptive subdivision.
+    pub elements: usize,
+    /// Unshot power over emitted power (the ambient term previews it).
+    pub unshot: f64,
+    pub converged: bool,
 }
 
 /// Packs `[u32 LE header length][JSON header][image bytes]`.
@@ -115,7 +128,7 @@ mod tests {
                 encode: 1.25,
             },
             passes_ms: [("shade".to_string(), 0.75)].into_iter().collect(),
-            radiosity: Some(crate::radiosity::Progress {
+            radiosity: Some(SolveProgress {
                 shots: 120,
                 elements: 5000,
                 unshot: 0.25,

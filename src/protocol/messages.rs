@@ -1,6 +1,7 @@
 use serde::{Deserialize, Serialize};
 
 use super::Limits;
+pub use crate::viewing::Display;
 
 pub const PROTOCOL_VERSION: u32 = 1;
 
@@ -68,23 +69,6 @@ fn default_in_flight() -> u32 {
     2
 }
 
-/// Physical display geometry: turns pixels into degrees of visual angle (design.md §5 defaults).
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct Display {
-    pub width_cm: f64,
-    pub distance_cm: f64,
-}
-
-impl Default for Display {
-    fn default() -> Self {
-        Self {
-            width_cm: 53.0,
-            distance_cm: 60.0,
-        }
-    }
-}
-
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "lowercase")]
 pub enum Codec {
@@ -117,60 +101,6 @@ pub struct Ack {
     /// True when the client skipped the frame because a newer one was ready first.
     #[serde(default)]
     pub dropped: bool,
-}
-
-/// Changes a session's quality knobs live. `preset` (if given) resets every knob to that
-/// preset first; the other fields then override single knobs. Omitted fields keep their value.
-#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct SettingsPatch {
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub preset: Option<String>,
-    /// Radiosity's interreflected light on (default) or off.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub indirect: Option<bool>,
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub foveation: Option<bool>,
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub mar_slope: Option<f64>,
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub mar_w0_deg: Option<f64>,
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub min_probability: Option<f64>,
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub probability: Option<crate::optics::acuity::ProbabilityForm>,
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub saliency: Option<bool>,
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub motion: Option<bool>,
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub noise: Option<crate::foveation::Noise>,
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub reprojection: Option<bool>,
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub max_history_age: Option<u32>,
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub reconstruction: Option<crate::foveation::Reconstruction>,
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub sibson_window: Option<u32>,
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub compaction: Option<bool>,
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub translucency: Option<crate::foveation::Rung>,
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub cut_level: Option<u32>,
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub cut_epsilon: Option<f64>,
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub dof: Option<bool>,
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub overlay: Option<crate::foveation::settings::Overlay>,
-    /// Predict the gaze at the expected display time.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub prediction: Option<bool>,
-    /// How far ahead to predict, ms; 0: the session's measured gaze-to-frame latency.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub prediction_horizon_ms: Option<f64>,
 }
 
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]

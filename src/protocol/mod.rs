@@ -10,10 +10,12 @@ mod messages;
 mod parse;
 
 pub use error::{ErrorCode, ProtocolError};
-pub use frame::{decode_frame, encode_frame, FrameHeader, GazeUsed, StageTimes};
+pub use frame::{decode_frame, encode_frame, FrameHeader, GazeUsed, SolveProgress, StageTimes};
 pub use limits::Limits;
 pub use messages::{
-    Ack, Codec, Display, ErrorMessage, Gaze, Hello, SceneInfo, ServerMessage, SettingsPatch,
-    Welcome, PROTOCOL_VERSION,
+    Ack, Codec, Display, ErrorMessage, Gaze, Hello, SceneInfo, ServerMessage, Welcome,
+    PROTOCOL_VERSION,
 };
 pub use parse::{parse_client_message, ClientMessage};
+/// The `settings` message is the knob list of [`crate::settings::knobs`].
+pub use crate::settings::SettingsPatch;

@@ -1,7 +1,7 @@
 use serde::de::DeserializeOwned;
 use serde_json::{Map, Value};
 
-use super::messages::SettingsPatch;
+use crate::settings::{KnobError, SettingsPatch};
 use super::{Ack, ErrorCode, Gaze, Hello, Limits, ProtocolError, PROTOCOL_VERSION};
 
 /// A client message that parsed and passed every range check.
@@ -160,31 +160,14 @@ fn validate_hello(h: &Hello, limits: &Limits) -> Result<(), ProtocolError> {
 }
 
 fn validate_settings(p: &SettingsPatch) -> Result<(), ProtocolError> {
-    if let Some(v) = p.mar_slope {
-        in_range("mar_slope", v, 0.0, 1.0)?;
-    }
-    if let Some(v) = p.mar_w0_deg {
-        in_range("mar_w0_deg", v, 0.001, 1.0)?;
-    }
-    if let Some(v) = p.min_probability {
-        in_range("min_probability", v, 0.0, 1.0)?;
-    }
-    if let Some(v) = p.max_history_age {
-        in_range("max_history_age", f64::from(v), 0.0, 1000.0)?;
-    }
-    if let Some(v) = p.cut_level {
-        in_range("cut_level", f64::from(v), 0.0, 6.0)?;
-    }
-    if let Some(v) = p.cut_epsilon {
-        in_range("cut_epsilon", v, 0.0, 10.0)?;
-    }
-    if let Some(v) = p.prediction_horizon_ms {
-        in_range("prediction_horizon_ms", v, 0.0, 500.0)?;
-    }
-    if let Some(v) = p.sibson_window {
-        in_range("sibson_window", f64::from(v), 0.0, 32.0)?;
-    }
-    Ok(())
+    p.validate().map_err(|e| {
+        let code = match e {
+            KnobError::NotFinite { .. } => ErrorCode::NotFinite,
+            KnobError::OutOfRange { .. } => ErrorCode::OutOfRange,
+            KnobError::UnknownPreset(_) => ErrorCode::UnknownPreset,
+        };
+        ProtocolError::new(code, e.to_string())
+    })
 }
 
 fn validate_gaze(g: &Gaze, limits: &Limits) -> Result<(), ProtocolError> {

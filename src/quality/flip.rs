@@ -1,6 +1,6 @@
 //! FLIP (Andersson et al. 2020) through the `nv-flip` crate (NVIDIA's reference implementation).
 
-use crate::optics::acuity::Viewing;
+use crate::viewing::Viewing;
 
 /// Pixels per degree of visual angle at the frame centre for this display geometry: FLIP's
 /// observer model depends on it.

@@ -35,7 +35,7 @@ pub fn measure(
     test: &[u8],
     width: u32,
     height: u32,
-    viewing: &crate::optics::acuity::Viewing,
+    viewing: &crate::viewing::Viewing,
     gaze_px: [f64; 2],
     weighting: &Weighting,
 ) -> Errors {

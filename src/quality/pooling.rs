@@ -1,7 +1,8 @@
 //! Pooling per-pixel errors with a weight that falls with eccentricity: errors far from the gaze
 //! matter less because the eye resolves less there.
 
-use crate::optics::acuity::{mar_deg, Viewing};
+use crate::optics::acuity::mar_deg;
+use crate::viewing::Viewing;
 
 /// The acuity weighting: weight(e) = min(1, w_px / (m·e + w0)), the display's pixel angle over
 /// the MAR at eccentricity e. It is 1 wherever the eye resolves single pixels and falls as

@@ -168,15 +168,6 @@ impl RadiosityHandle {
     pub fn same_solve(&self, other: &RadiosityHandle) -> bool {
         Arc::ptr_eq(&self.shared, &other.shared)
     }
-
-    /// Every solve still in use in this process: for readiness and metrics.
-    pub fn all() -> Vec<RadiosityHandle> {
-        let map = cache().lock().unwrap_or_else(|p| p.into_inner());
-        map.values()
-            .filter_map(Weak::upgrade)
-            .map(|shared| RadiosityHandle { shared })
-            .collect()
-    }
 }
 
 fn publish(shared: &Shared, solver: &Solver, start: Instant, converged: bool) {

@@ -2,7 +2,7 @@
 //! newest snapshot as the per-vertex irradiance buffer.
 
 use super::pass::gbuffer::GiVertex;
-use super::renderer::SceneGpu;
+use super::scene_gpu::SceneGpu;
 use crate::scene::{Plan, Scene};
 
 /// Starts (or joins) the scene's radiosity solve when its plan asks for one.

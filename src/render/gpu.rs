@@ -5,9 +5,11 @@ use super::timer::PassTimer;
 
 pub const COMMON: &str = include_str!("../../shaders/common.wgsl");
 
-/// A pass's WGSL with the shared prelude (frame uniforms, helpers) in front.
+/// A pass's WGSL with the shared prelude in front: the constants generated from Rust, then the
+/// frame uniforms and helpers of `common.wgsl`.
 pub fn compose(pass_source: &str) -> String {
-    format!("{COMMON}\n{pass_source}")
+    let constants = super::uniforms::wgsl_constants();
+    format!("{constants}\n{COMMON}\n{pass_source}")
 }
 
 pub fn shader(device: &wgpu::Device, label: &str, pass_source: &str) -> wgpu::ShaderModule {

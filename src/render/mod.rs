@@ -2,25 +2,36 @@
 //! pipelines, per-scene GPU data and per-size targets and turns a [`FrameRequest`] into pixels;
 //! [`RenderThread`] runs a `Renderer` on its own thread so nothing async ever waits on the GPU.
 //!
-//! Passes, in frame order, one file each beside its shader in `shaders/` (see [`pass`]):
-//! G-buffer → sampling map → compaction → shading → jump flooding → resolve → depth of field →
-//! output → gaze marker. Full and reference modes shade every pixel and skip the foveation passes.
+//! Passes, one file each beside its shader in `shaders/` (see [`pass`]), each declaring what it
+//! reads and writes for the frame graph ([`graph`]); [`frame`] records them in frame order:
+//! G-buffer → (screen diffusion) → sampling map → compaction → shading → jump flooding →
+//! resolve → (depth of field) → output with the gaze marker. Full and reference modes shade
+//! every pixel and skip the foveation passes.
+//!
+//! This module imports nothing from `protocol` or `server` (`tests/boundaries.rs`).
 
 pub mod cpu_reference;
 mod device;
+pub mod frame;
 mod frame_uniform;
 mod gi;
 pub mod gpu;
+pub mod graph;
 pub mod materials;
 pub mod pass;
 mod renderer;
+mod request;
+mod scene_gpu;
 mod targets;
 mod thread;
 pub mod timer;
 pub mod uniforms;
 
 pub use device::Gpu;
-pub use renderer::{FrameRequest, Inspection, RenderedFrame, Renderer, DEFAULT_PUPIL_MM, MIN_XI};
+pub use renderer::Renderer;
+pub use request::{
+    FrameRequest, Inspection, RenderedFrame, DEFAULT_PUPIL_MM, MAX_SIDE, MIN_XI,
+};
 pub use thread::{RenderHandle, RenderThread, Rendered};
 
 #[derive(Debug, thiserror::Error)]
@@ -43,6 +54,8 @@ pub enum RenderError {
     Gpu(String),
     #[error("reading the frame back from the GPU failed: {0}")]
     Readback(String),
+    #[error("frame graph: {0}")]
+    Graph(#[from] graph::GraphError),
     #[error("the render thread has stopped")]
     ThreadGone,
 }

@@ -35,6 +35,7 @@ pub struct Rendered {
 pub struct RenderHandle {
     tx: mpsc::Sender<Job>,
     adapter: String,
+    solves: super::renderer::Solves,
 }
 
 impl RenderHandle {
@@ -58,6 +59,11 @@ impl RenderHandle {
         let _ = self.tx.try_send(Job::Release(stream));
     }
 
+    /// The radiosity solves of the scenes loaded so far.
+    pub fn solves(&self) -> Vec<crate::radiosity::RadiosityHandle> {
+        self.solves.lock().map(|s| s.clone()).unwrap_or_default()
+    }
+
     /// The adapter's one-line description.
     pub fn adapter(&self) -> &str {
         &self.adapter
@@ -70,11 +76,19 @@ impl RenderThread {
     /// Moves `renderer` onto a new thread. The thread ends when every handle is dropped.
     pub fn spawn(renderer: Renderer) -> std::io::Result<(RenderHandle, JoinHandle<()>)> {
         let adapter = renderer.adapter();
+        let solves = renderer.solves();
         let (tx, rx) = mpsc::channel(QUEUE_DEPTH);
         let join = std::thread::Builder::new()
             .name("fovea-render".into())
             .spawn(move || run(renderer, rx))?;
-        Ok((RenderHandle { tx, adapter }, join))
+        Ok((
+            RenderHandle {
+                tx,
+                adapter,
+                solves,
+            },
+            join,
+        ))
     }
 }
 

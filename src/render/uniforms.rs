@@ -1,6 +1,13 @@
-//! The frame's uniforms: the Rust twin of `struct Frame` in `shaders/common.wgsl`.
+//! The frame's uniforms: the Rust twin of `struct Frame` in `shaders/common.wgsl`, with named
+//! integer and enum fields, and the one source of the constants both sides share (modes, pixel
+//! flags, rung, overlay and probability-form ids): [`wgsl_constants`] writes them into the WGSL
+//! prelude, so no shader carries a hand copy. `tests/shaders.rs` compares every field offset
+//! and every constant with what naga reads from the shaders.
 
 use bytemuck::{Pod, Zeroable};
+
+use crate::optics::acuity::ProbabilityForm;
+use crate::settings::{Overlay, Rung};
 
 pub const MODE_FOVEATED: u32 = 1;
 pub const MODE_SALIENCY: u32 = 2;
@@ -9,40 +16,151 @@ pub const MODE_WHITE_NOISE: u32 = 8;
 pub const MODE_REPROJECTION: u32 = 16;
 pub const MODE_SIBSON: u32 = 32;
 pub const MODE_DOF: u32 = 64;
+/// Radiosity's direct light only (the interreflected part left out, for comparison).
 pub const MODE_DIRECT_ONLY: u32 = 128;
 
+/// Per-pixel state written by the sampling pass.
 pub const FLAG_COVERED: u32 = 1;
 pub const FLAG_SAMPLED: u32 = 2;
 pub const FLAG_REUSED: u32 = 4;
 
-#[repr(C)]
-#[derive(Clone, Copy, Pod, Zeroable, Debug, Default)]
-pub struct FrameUniform {
-    pub view_proj: [[f32; 4]; 4],
-    pub inv_view_proj: [[f32; 4]; 4],
-    pub prev_view_proj: [[f32; 4]; 4],
-    pub eye: [f32; 4],
-    pub prev_eye: [f32; 4],
-    pub to_light: [f32; 4],
-    pub light: [f32; 4],
-    pub albedo_ambient: [f32; 4],
-    pub background: [f32; 4],
-    pub size: [u32; 4],
-    pub gaze: [f32; 4],
-    pub viewing: [f32; 4],
-    pub acuity: [f32; 4],
-    pub temporal: [f32; 4],
-    pub tile: [u32; 4],
-    pub marker: [f32; 4],
-    pub photon: [f32; 4],
-    pub cut: [f32; 4],
+/// Every integer constant the shaders share with Rust, by its WGSL name.
+pub fn constants() -> Vec<(&'static str, u32)> {
+    vec![
+        ("MODE_FOVEATED", MODE_FOVEATED),
+        ("MODE_SALIENCY", MODE_SALIENCY),
+        ("MODE_MOTION", MODE_MOTION),
+        ("MODE_WHITE_NOISE", MODE_WHITE_NOISE),
+        ("MODE_REPROJECTION", MODE_REPROJECTION),
+        ("MODE_SIBSON", MODE_SIBSON),
+        ("MODE_DOF", MODE_DOF),
+        ("MODE_DIRECT_ONLY", MODE_DIRECT_ONLY),
+        ("FLAG_COVERED", FLAG_COVERED),
+        ("FLAG_SAMPLED", FLAG_SAMPLED),
+        ("FLAG_REUSED", FLAG_REUSED),
+        ("RUNG_OPAQUE", Rung::Opaque.id()),
+        ("RUNG_NORMAL_BLUR", Rung::NormalBlur.id()),
+        ("RUNG_SCREEN", Rung::Screen.id()),
+        ("RUNG_HIERARCHICAL", Rung::Hierarchical.id()),
+        ("RUNG_BRUTE_FORCE", Rung::BruteForce.id()),
+        ("OVERLAY_NONE", Overlay::None.id()),
+        ("OVERLAY_SAMPLES", Overlay::Samples.id()),
+        ("OVERLAY_PROBABILITY", Overlay::Probability.id()),
+        ("PROBABILITY_LINEAR", probability_form_id(ProbabilityForm::Linear)),
+        ("PROBABILITY_DENSITY", probability_form_id(ProbabilityForm::Density)),
+        ("NO_SEED", crate::foveation::reconstruct::NO_SEED),
+    ]
 }
 
-#[cfg(test)]
-mod tests {
-    #[test]
-    fn uniform_size_matches_the_wgsl_struct() {
-        // 3 mat4x4 + 15 vec4: any drift from common.wgsl shows up here first.
-        assert_eq!(std::mem::size_of::<super::FrameUniform>(), 3 * 64 + 15 * 16);
+pub fn probability_form_id(form: ProbabilityForm) -> u32 {
+    match form {
+        ProbabilityForm::Linear => 0,
+        ProbabilityForm::Density => 1,
     }
+}
+
+/// The shared constants as WGSL declarations, placed in front of every shader.
+pub fn wgsl_constants() -> String {
+    let mut s = String::from("// Generated from src/render/uniforms.rs: edit there.\n");
+    for (name, value) in constants() {
+        s.push_str(&format!("const {name}: u32 = {value}u;\n"));
+    }
+    s
+}
+
+/// Declares `FrameUniform` and `FIELDS` (each field's name and byte offset) from one list.
+macro_rules! frame_uniform {
+    ($( $(#[doc = $doc:literal])* $name:ident : $ty:ty ),* $(,)?) => {
+        #[repr(C)]
+        #[derive(Clone, Copy, Pod, Zeroable, Debug, Default)]
+        pub struct FrameUniform {
+            $( $(#[doc = $doc])* pub $name: $ty, )*
+        }
+
+        /// Every field of [`FrameUniform`] with its byte offset (padding starts with `_`).
+        pub const FIELDS: &[(&str, usize)] = &[
+            $( (stringify!($name), std::mem::offset_of!(FrameUniform, $name)), )*
+        ];
+    };
+}
+
+frame_uniform! {
+    view_proj: [[f32; 4]; 4],
+    inv_view_proj: [[f32; 4]; 4],
+    prev_view_proj: [[f32; 4]; 4],
+    /// Camera position, scene units.
+    eye: [f32; 3],
+    metres_per_unit: f32,
+    /// Last frame's camera position.
+    prev_eye: [f32; 3],
+    /// 1 when last frame's buffers are valid history.
+    has_history: u32,
+    /// Unit vector towards the light.
+    to_light: [f32; 3],
+    /// Ambient light as a fraction of the key light.
+    ambient: f32,
+    /// Light colour × intensity.
+    light: [f32; 3],
+    mm_per_unit: f32,
+    /// Background colour, linear.
+    background: [f32; 3],
+    /// OVERLAY_* id.
+    overlay: u32,
+    width: u32,
+    height: u32,
+    frame_index: u32,
+    /// MODE_* bits.
+    mode: u32,
+    /// Gaze in pixels, top-left origin.
+    gaze_px: [f32; 2],
+    pupil_mm: f32,
+    /// Distance to the camera's target, scene units (the focus of depth of field).
+    focus_distance: f32,
+    /// Display centimetres per pixel.
+    cm_per_pixel: f32,
+    distance_cm: f32,
+    /// The pixel's angle w_min, degrees.
+    w_min_deg: f32,
+    /// MAR at the frame's farthest point, degrees.
+    w_far_deg: f32,
+    /// MAR slope m, degrees per degree of eccentricity.
+    mar_slope: f32,
+    /// MAR at the fovea w0, degrees.
+    mar_w0_deg: f32,
+    /// Minimum sampling probability ξ.
+    min_probability: f32,
+    /// PROBABILITY_* id.
+    probability_form: u32,
+    /// Frames a reused colour may age.
+    max_history_age: u32,
+    /// Relative depth tolerance ε of the reprojection test.
+    depth_epsilon: f32,
+    /// Camera radians per pixel.
+    radians_per_pixel: f32,
+    /// Sibson window bound, pixels.
+    sibson_window: u32,
+    /// Blue-noise tile offset this frame.
+    tile_offset: [u32; 2],
+    /// Gaze marker centre, pixels.
+    marker_centre: [f32; 2],
+    /// Gaze marker ring radius, pixels; 0: no marker.
+    marker_radius: f32,
+    marker_thickness: f32,
+    /// Photon map side.
+    photon_side: u32,
+    /// A photon's radius, mm (its texel footprint as a disc).
+    photon_radius_mm: f32,
+    /// Pyramid level traversal starts from.
+    photon_start_level: u32,
+    /// The finest pyramid level a cluster may come from.
+    cut_level: u32,
+    /// A cluster is used when its extent < ε × its distance.
+    cut_epsilon: f32,
+    /// RUNG_* id.
+    rung: u32,
+    /// 1 when the photon pyramid has been built for this light.
+    pyramid_ready: u32,
+    _pad0: u32,
+    _pad1: u32,
+    _pad2: u32,
 }

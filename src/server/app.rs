@@ -25,7 +25,7 @@ pub fn router(state: Arc<ServerState>) -> Router {
 async fn readyz(State(state): State<Arc<ServerState>>) -> Response {
     if state.slots.available_permits() > 0 {
         let mut body = String::from("ready\n");
-        for solve in crate::radiosity::RadiosityHandle::all() {
+        for solve in state.render.solves() {
             if let Some(p) = solve.latest().map(|s| s.progress()) {
                 body.push_str(&format!(
                     "radiosity {}: {} ({} shots, {:.2}% of the emitted power unshot)\n",

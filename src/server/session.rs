@@ -17,13 +17,14 @@ use futures_util::{SinkExt, StreamExt};
 use super::recorder::Recorder;
 use super::ServerState;
 use crate::encode;
-use crate::foveation::{Settings, PRESETS};
+use crate::settings::{Preset, Settings};
 use crate::gaze::prediction::Predictor;
 use crate::protocol::{
     encode_frame, parse_client_message, ClientMessage, ErrorCode, FrameHeader, Gaze, GazeUsed,
-    Hello, ProtocolError, ServerMessage, StageTimes, Welcome, PROTOCOL_VERSION,
+    Hello, ProtocolError, ServerMessage, SolveProgress, StageTimes, Welcome, PROTOCOL_VERSION,
 };
 use crate::render::FrameRequest;
+use crate::viewing::Viewing;
 
 /// A frame being made: everything needed to render it and to write its header.
 struct FrameJob {
@@ -233,10 +234,15 @@ impl Session {
                 if self.hello.is_none() {
                     return Some(no_hello("settings"));
                 }
-                if let Err(name) = self.settings.apply(&patch) {
-                    return Some(unknown_preset(&name));
+                if let Err(e) = self.settings.apply(&patch) {
+                    let code = match e {
+                        crate::settings::KnobError::UnknownPreset(_) => ErrorCode::UnknownPreset,
+                        crate::settings::KnobError::NotFinite { .. } => ErrorCode::NotFinite,
+                        crate::settings::KnobError::OutOfRange { .. } => ErrorCode::OutOfRange,
+                    };
+                    return Some(ProtocolError::new(code, e.to_string()).into());
                 }
-                tracing::debug!(session = id, preset = %self.settings.preset, "settings changed");
+                tracing::debug!(session = id, preset = %self.settings.label(), "settings changed");
                 self.dirty = true;
                 None
             }
@@ -282,16 +288,17 @@ impl Session {
             )
             .into();
         };
-        let Some(settings) = Settings::preset(&hello.preset) else {
+        let Some(preset) = Preset::from_name(&hello.preset) else {
             return unknown_preset(&hello.preset);
         };
+        let settings = Settings::of(preset);
         tracing::info!(session = id, scene = %hello.scene, w = hello.width, h = hello.height, codec = ?hello.codec, "session started");
         let welcome = Welcome {
             v: PROTOCOL_VERSION,
             session: id,
             scene: scene.clone(),
             scenes: state.scenes.iter().map(|s| s.name.clone()).collect(),
-            presets: PRESETS.iter().map(|p| p.to_string()).collect(),
+            presets: Preset::ALL.iter().map(|p| p.to_string()).collect(),
             width: hello.width,
             height: hello.height,
             codec: hello.codec,
@@ -299,16 +306,8 @@ impl Session {
             limits: state.limits.clone(),
             adapter: state.render.adapter().to_string(),
         };
-        let d = hello.display;
-        let frame_deg = [
-            2.0 * (0.5 * d.width_cm / d.distance_cm).atan().to_degrees(),
-            2.0 * (0.5 * d.width_cm * f64::from(hello.height)
-                / f64::from(hello.width)
-                / d.distance_cm)
-                .atan()
-                .to_degrees(),
-        ];
-        self.predictor = Some(Predictor::new(frame_deg));
+        let viewing = Viewing::new(hello.display, hello.width, hello.height);
+        self.predictor = Some(Predictor::new(viewing.field_of_view_deg()));
         self.hello = Some(hello);
         self.settings = settings;
         self.hello_at = Some(Instant::now());
@@ -334,8 +333,8 @@ impl Session {
         let raw = gaze.map(|g| [g.x as f32, g.y as f32]).unwrap_or([0.5, 0.5]);
         request.gaze = raw;
         let mut predicted = false;
-        if self.settings.prediction && gaze.is_some() {
-            let horizon = match self.settings.prediction_horizon_ms {
+        if self.settings.session.prediction && gaze.is_some() {
+            let horizon = match self.settings.session.prediction_horizon_ms {
                 h if h > 0.0 => f64::from(h),
                 _ => self.latency_ms.unwrap_or(0.0),
             };
@@ -351,7 +350,7 @@ impl Session {
             .map(|p| p as f32)
             .unwrap_or(crate::render::DEFAULT_PUPIL_MM);
         request.display = hello.display;
-        request.settings = self.settings.clone();
+        request.settings = self.settings.render.clone();
         request.stream = stream;
         request.time_s = self
             .hello_at
@@ -383,7 +382,7 @@ impl Session {
 fn unknown_preset(name: &str) -> ServerMessage {
     ProtocolError::new(
         ErrorCode::UnknownPreset,
-        format!("unknown preset {name:?}; available: {}", PRESETS.join(", ")),
+        format!("unknown preset {name:?}; available: {}", Preset::names()),
     )
     .into()
 }
@@ -416,7 +415,12 @@ async fn make_frame(
     let (w, h) = (frame.width, frame.height);
     let (render_ms, readback_ms, sampled) = (frame.render_ms, frame.readback_ms, frame.sampled);
     let passes_ms = frame.passes_ms;
-    let radiosity = frame.radiosity;
+    let radiosity = frame.radiosity.map(|p| SolveProgress {
+        shots: p.shots,
+        elements: p.elements,
+        unshot: p.unshot,
+        converged: p.converged,
+    });
     let rgba = frame.rgba;
     let frame_no = job.frame;
     let encoded = tokio::task::spawn_blocking(move || {

@@ -1,20 +1,25 @@
 //! Depth-of-field pass: blurs each pixel by the eye's blur circle for the current pupil and the
 //! depth under the gaze.
 
-use crate::render::gpu::{self, FramePass, FLOAT};
+use crate::render::graph::{read, texture, uniform, write, GraphError, PassDecl, Recorder};
 
-pub const SHADER: &str = include_str!("../../../shaders/dof.wgsl");
+pub const PASS: PassDecl = PassDecl {
+    label: "dof",
+    shader: include_str!("../../../shaders/dof.wgsl"),
+    first_binding: 0,
+    bindings: &[
+        uniform("frame.uniform"),
+        read("frame.color"),
+        texture("gbuffer.normal_distance"),
+        write("dof.color"),
+    ],
+    attachments: &[],
+    entry_points: &["main"],
+};
 
-pub fn new(device: &wgpu::Device) -> FramePass {
-    FramePass::new(
-        device,
-        "dof",
-        SHADER,
-        &[
-            gpu::uniform(0, false),
-            gpu::storage_buffer(1, true),
-            gpu::texture(2, FLOAT),
-            gpu::storage_buffer(3, false),
-        ],
-    )
+/// Blurs the newest colour; from here on `frame.color` is the blurred one.
+pub fn record(f: &mut Recorder) -> Result<(), GraphError> {
+    f.run_frame_pass(&PASS)?;
+    f.route("frame.color", "dof.color");
+    Ok(())
 }

@@ -3,12 +3,8 @@
 
 use wgpu::util::DeviceExt;
 
-use crate::render::gpu;
-use crate::render::timer::PassTimer;
+use crate::render::graph::{read, uniform, GraphError, PassDecl, Recorder};
 use crate::scene::Scene;
-
-pub const SHADER: &str = include_str!("../../../shaders/gbuffer.wgsl");
-pub const LABEL: &str = "gbuffer";
 
 pub const NORMAL_DISTANCE: wgpu::TextureFormat = wgpu::TextureFormat::Rgba32Float;
 pub const ALBEDO: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8Unorm;
@@ -58,162 +54,162 @@ pub struct MeshBuffers {
     pub gi: wgpu::Buffer,
 }
 
-pub struct GBufferPass {
-    pipeline: wgpu::RenderPipeline,
-    pub layout: wgpu::BindGroupLayout,
-}
+pub const PASS: PassDecl = PassDecl {
+    label: "gbuffer",
+    shader: include_str!("../../../shaders/gbuffer.wgsl"),
+    first_binding: 0,
+    bindings: &[uniform("frame.uniform"), read("materials.scene")],
+    attachments: &[
+        "gbuffer.normal_distance",
+        "gbuffer.albedo",
+        "gbuffer.blurred_normal",
+        "gbuffer.irradiance",
+        "gbuffer.depth",
+    ],
+    entry_points: &["vs_main", "fs_main"],
+};
 
-/// The textures the pass writes.
-pub struct GBufferTargets<'a> {
-    pub normal_distance: &'a wgpu::TextureView,
-    pub albedo: &'a wgpu::TextureView,
-    pub blurred_normal: &'a wgpu::TextureView,
-    pub irradiance: &'a wgpu::TextureView,
-    pub depth: &'a wgpu::TextureView,
-}
-
-impl GBufferPass {
-    pub fn new(device: &wgpu::Device) -> GBufferPass {
-        let module = gpu::shader(device, LABEL, SHADER);
-        let layout = gpu::layout(
-            device,
-            LABEL,
-            &[gpu::uniform(0, false), gpu::storage_buffer(1, true)],
-        );
-        let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-            label: Some(LABEL),
-            bind_group_layouts: &[Some(&layout)],
-            immediate_size: 0,
-        });
-        let target = |format: wgpu::TextureFormat| Some(wgpu::ColorTargetState::from(format));
-        let pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-            label: Some(LABEL),
-            layout: Some(&pipeline_layout),
-            vertex: wgpu::VertexState {
-                module: &module,
-                entry_point: Some("vs_main"),
-                compilation_options: Default::default(),
-                buffers: &[Some(VERTEX_LAYOUT), Some(GI_LAYOUT)],
-            },
-            primitive: wgpu::PrimitiveState {
-                cull_mode: Some(wgpu::Face::Back),
-                ..Default::default()
-            },
-            depth_stencil: Some(wgpu::DepthStencilState {
-                format: DEPTH,
-                depth_write_enabled: Some(true),
-                depth_compare: Some(wgpu::CompareFunction::Less),
-                stencil: Default::default(),
-                bias: Default::default(),
-            }),
-            multisample: Default::default(),
-            fragment: Some(wgpu::FragmentState {
-                module: &module,
-                entry_point: Some("fs_main"),
-                compilation_options: Default::default(),
-                targets: &[
-                    target(NORMAL_DISTANCE),
-                    target(ALBEDO),
-                    target(BLURRED_NORMAL),
-                    target(IRRADIANCE),
-                ],
-            }),
-            multiview_mask: None,
-            cache: None,
-        });
-        GBufferPass { pipeline, layout }
-    }
-
-    pub fn upload(&self, device: &wgpu::Device, scene: &Scene) -> MeshBuffers {
-        let mesh = &scene.mesh;
-        let vertices: Vec<Vertex> = (0..mesh.positions.len())
-            .map(|i| Vertex {
-                position: mesh.positions[i].to_array(),
-                normal: mesh.normals[i].to_array(),
-                blurred_normal: mesh.blurred_normals[i].to_array(),
-                material: mesh.material[i],
-            })
-            .collect();
-        let label = Some(scene.name());
-        let vertices = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-            label,
-            contents: bytemuck::cast_slice(&vertices),
-            usage: wgpu::BufferUsages::VERTEX,
-        });
-        let indices = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-            label,
-            contents: bytemuck::cast_slice(&mesh.indices),
-            usage: wgpu::BufferUsages::INDEX,
-        });
-        let gi = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-            label: Some("gi"),
-            contents: bytemuck::cast_slice(&vec![
-                <GiVertex as bytemuck::Zeroable>::zeroed();
-                mesh.positions.len().max(1)
-            ]),
-            usage: wgpu::BufferUsages::VERTEX | wgpu::BufferUsages::COPY_DST,
-        });
-        MeshBuffers {
-            vertices,
-            indices,
-            index_count: mesh.indices.len() as u32,
-            gi,
-        }
-    }
-
-    pub fn encode(
-        &self,
-        encoder: &mut wgpu::CommandEncoder,
-        targets: &GBufferTargets,
-        bind_group: &wgpu::BindGroup,
-        mesh: &MeshBuffers,
-        timer: &mut PassTimer,
-    ) {
-        let clear = |view, color: wgpu::Color| {
-            Some(wgpu::RenderPassColorAttachment {
-                view,
-                depth_slice: None,
-                resolve_target: None,
-                ops: wgpu::Operations {
-                    load: wgpu::LoadOp::Clear(color),
-                    store: wgpu::StoreOp::Store,
-                },
-            })
-        };
-        let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-            label: Some(LABEL),
-            color_attachments: &[
-                // Distance −1 marks "no surface": it can never pass the reprojection test.
-                clear(
-                    targets.normal_distance,
-                    wgpu::Color {
-                        r: 0.0,
-                        g: 0.0,
-                        b: 0.0,
-                        a: -1.0,
-                    },
-                ),
-                clear(targets.albedo, wgpu::Color::TRANSPARENT),
-                clear(targets.blurred_normal, wgpu::Color::TRANSPARENT),
-                clear(targets.irradiance, wgpu::Color::TRANSPARENT),
+fn pipeline(
+    device: &wgpu::Device,
+    layout: &wgpu::BindGroupLayout,
+    module: &wgpu::ShaderModule,
+) -> wgpu::RenderPipeline {
+    let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+        label: Some(PASS.label),
+        bind_group_layouts: &[Some(layout)],
+        immediate_size: 0,
+    });
+    let target = |format: wgpu::TextureFormat| Some(wgpu::ColorTargetState::from(format));
+    device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+        label: Some(PASS.label),
+        layout: Some(&pipeline_layout),
+        vertex: wgpu::VertexState {
+            module,
+            entry_point: Some("vs_main"),
+            compilation_options: Default::default(),
+            buffers: &[Some(VERTEX_LAYOUT), Some(GI_LAYOUT)],
+        },
+        primitive: wgpu::PrimitiveState {
+            cull_mode: Some(wgpu::Face::Back),
+            ..Default::default()
+        },
+        depth_stencil: Some(wgpu::DepthStencilState {
+            format: DEPTH,
+            depth_write_enabled: Some(true),
+            depth_compare: Some(wgpu::CompareFunction::Less),
+            stencil: Default::default(),
+            bias: Default::default(),
+        }),
+        multisample: Default::default(),
+        fragment: Some(wgpu::FragmentState {
+            module,
+            entry_point: Some("fs_main"),
+            compilation_options: Default::default(),
+            targets: &[
+                target(NORMAL_DISTANCE),
+                target(ALBEDO),
+                target(BLURRED_NORMAL),
+                target(IRRADIANCE),
             ],
-            depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
-                view: targets.depth,
-                depth_ops: Some(wgpu::Operations {
-                    load: wgpu::LoadOp::Clear(1.0),
-                    store: wgpu::StoreOp::Store,
-                }),
-                stencil_ops: None,
+        }),
+        multiview_mask: None,
+        cache: None,
+    })
+}
+
+/// Rasterises `mesh` into the G-buffer targets.
+pub fn record(f: &mut Recorder, mesh: &MeshBuffers) -> Result<(), GraphError> {
+    let pipeline = f.pipelines.render(&PASS, pipeline);
+    let bind_group = f.bind_group(&PASS)?;
+    let view = |name| f.view(name).cloned();
+    let (nd, albedo, blurred, irradiance, depth) = (
+        view("gbuffer.normal_distance")?,
+        view("gbuffer.albedo")?,
+        view("gbuffer.blurred_normal")?,
+        view("gbuffer.irradiance")?,
+        view("gbuffer.depth")?,
+    );
+    let clear = |view, color: wgpu::Color| {
+        Some(wgpu::RenderPassColorAttachment {
+            view,
+            depth_slice: None,
+            resolve_target: None,
+            ops: wgpu::Operations {
+                load: wgpu::LoadOp::Clear(color),
+                store: wgpu::StoreOp::Store,
+            },
+        })
+    };
+    // Distance −1 marks "no surface": it can never pass the reprojection test.
+    let no_surface = wgpu::Color {
+        r: 0.0,
+        g: 0.0,
+        b: 0.0,
+        a: -1.0,
+    };
+    let mut pass = f.encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+        label: Some(PASS.label),
+        color_attachments: &[
+            clear(&nd, no_surface),
+            clear(&albedo, wgpu::Color::TRANSPARENT),
+            clear(&blurred, wgpu::Color::TRANSPARENT),
+            clear(&irradiance, wgpu::Color::TRANSPARENT),
+        ],
+        depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+            view: &depth,
+            depth_ops: Some(wgpu::Operations {
+                load: wgpu::LoadOp::Clear(1.0),
+                store: wgpu::StoreOp::Store,
             }),
-            timestamp_writes: timer.render(LABEL),
-            occlusion_query_set: None,
-            multiview_mask: None,
-        });
-        pass.set_pipeline(&self.pipeline);
-        pass.set_bind_group(0, bind_group, &[]);
-        pass.set_vertex_buffer(0, mesh.vertices.slice(..));
-        pass.set_vertex_buffer(1, mesh.gi.slice(..));
-        pass.set_index_buffer(mesh.indices.slice(..), wgpu::IndexFormat::Uint32);
-        pass.draw_indexed(0..mesh.index_count, 0, 0..1);
+            stencil_ops: None,
+        }),
+        timestamp_writes: f.timer.render(PASS.label),
+        occlusion_query_set: None,
+        multiview_mask: None,
+    });
+    pass.set_pipeline(&pipeline);
+    pass.set_bind_group(0, &bind_group, &[]);
+    pass.set_vertex_buffer(0, mesh.vertices.slice(..));
+    pass.set_vertex_buffer(1, mesh.gi.slice(..));
+    pass.set_index_buffer(mesh.indices.slice(..), wgpu::IndexFormat::Uint32);
+    pass.draw_indexed(0..mesh.index_count, 0, 0..1);
+    Ok(())
+}
+
+/// Uploads a scene's mesh (vertex, index and radiosity buffers).
+pub fn upload(device: &wgpu::Device, scene: &Scene) -> MeshBuffers {
+    let mesh = &scene.mesh;
+    let vertices: Vec<Vertex> = (0..mesh.positions.len())
+        .map(|i| Vertex {
+            position: mesh.positions[i].to_array(),
+            normal: mesh.normals[i].to_array(),
+            blurred_normal: mesh.blurred_normals[i].to_array(),
+            material: mesh.material[i],
+        })
+        .collect();
+    let label = Some(scene.name());
+    let vertices = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+        label,
+        contents: bytemuck::cast_slice(&vertices),
+        usage: wgpu::BufferUsages::VERTEX,
+    });
+    let indices = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+        label,
+        contents: bytemuck::cast_slice(&mesh.indices),
+        usage: wgpu::BufferUsages::INDEX,
+    });
+    let gi = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+        label: Some("gi"),
+        contents: bytemuck::cast_slice(&vec![
+            <GiVertex as bytemuck::Zeroable>::zeroed();
+            mesh.positions.len().max(1)
+        ]),
+        usage: wgpu::BufferUsages::VERTEX | wgpu::BufferUsages::COPY_DST,
+    });
+    MeshBuffers {
+        vertices,
+        indices,
+        index_count: mesh.indices.len() as u32,
+        gi,
     }
 }

@@ -1,53 +1,51 @@
-//! Jump flooding: ⌈log2 N⌉ + 1 passes ping-ponging two seed textures, after which every pixel
-//! holds its (nearly always exactly) nearest shaded sample. The jump size of each pass comes
-//! from a uniform buffer slot selected by dynamic offset.
+//! Jump flooding: one step per jump size, ping-ponging two seed buffers, after which every
+//! pixel holds its (nearly always exactly) nearest shaded sample. Each step's jump size comes
+//! from a uniform slot selected by dynamic offset.
 
-use crate::render::gpu;
-use crate::render::timer::PassTimer;
+use crate::render::graph::{
+    dynamic_uniform, read, uniform, write, GraphError, PassDecl, Recorder,
+};
 
-pub const SHADER: &str = include_str!("../../../shaders/jfa.wgsl");
-pub const LABEL: &str = "jfa";
 /// Uniform slots must start at multiples of the device's offset alignment (256 by default).
 pub const SLOT: u64 = 256;
 
-pub struct JfaPass {
-    pipeline: wgpu::ComputePipeline,
-    pub layout: wgpu::BindGroupLayout,
-}
+pub const PASS: PassDecl = PassDecl {
+    label: "jfa",
+    shader: include_str!("../../../shaders/jfa.wgsl"),
+    first_binding: 0,
+    bindings: &[
+        uniform("frame.uniform"),
+        read("jfa.in"),
+        write("jfa.out"),
+        dynamic_uniform("jfa.steps", 16),
+    ],
+    attachments: &[],
+    entry_points: &["main"],
+};
 
-impl JfaPass {
-    pub fn new(device: &wgpu::Device) -> JfaPass {
-        let module = gpu::shader(device, LABEL, SHADER);
-        let layout = gpu::layout(
-            device,
-            LABEL,
-            &[
-                gpu::uniform(0, false),
-                gpu::storage_buffer(1, true),
-                gpu::storage_buffer(2, false),
-                gpu::uniform(3, true),
-            ],
-        );
-        let pipeline = gpu::compute_pipeline(device, LABEL, &module, "main", &layout);
-        JfaPass { pipeline, layout }
-    }
+const PING: &str = "jfa.seeds[ping]";
+const PONG: &str = "jfa.seeds[pong]";
 
-    /// Runs every step; `bind_groups[i]` reads the input of step i and writes its output.
-    pub fn encode(
-        &self,
-        encoder: &mut wgpu::CommandEncoder,
-        bind_groups: &[&wgpu::BindGroup],
-        size: (u32, u32),
-        timer: &mut PassTimer,
-    ) {
-        let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
-            label: Some(LABEL),
-            timestamp_writes: timer.compute(LABEL),
-        });
-        pass.set_pipeline(&self.pipeline);
-        for (i, bg) in bind_groups.iter().enumerate() {
-            pass.set_bind_group(0, *bg, &[(i as u64 * SLOT) as u32]);
-            pass.dispatch_workgroups(size.0.div_ceil(8), size.1.div_ceil(8), 1);
-        }
+/// Runs one step per jump size; afterwards `jfa.nearest` names the buffer holding the result.
+pub fn record(f: &mut Recorder, steps: &[u32]) -> Result<(), GraphError> {
+    let mut slots = vec![0u8; steps.len() * SLOT as usize];
+    for (i, s) in steps.iter().enumerate() {
+        let at = i * SLOT as usize;
+        slots[at..at + 4].copy_from_slice(&s.to_le_bytes());
     }
+    f.queue.write_buffer(f.buffer("jfa.steps")?, 0, &slots);
+    let mut from = "sampling.seeds";
+    let mut dispatches = Vec::with_capacity(steps.len());
+    for i in 0..steps.len() {
+        let to = if from == PING { PONG } else { PING };
+        f.route("jfa.in", from);
+        f.route("jfa.out", to);
+        let mut d = f.frame_dispatch(&PASS, "main")?;
+        d.offsets = vec![(i as u64 * SLOT) as u32];
+        dispatches.push(d);
+        from = to;
+    }
+    f.compute(PASS.label, &dispatches);
+    f.route("jfa.nearest", from);
+    Ok(())
 }

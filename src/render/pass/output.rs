@@ -1,23 +1,25 @@
 //! Output pass: linear colour to sRGB bytes, the sampling overlays, and the gaze marker that
 //! proves to the viewer the frame answers their gaze (drawn at the position the server used).
 
-use crate::render::gpu::{self, FramePass};
+use crate::render::graph::{read, uniform, write, GraphError, PassDecl, Recorder};
 
-pub const SHADER: &str = include_str!("../../../shaders/output.wgsl");
+pub const PASS: PassDecl = PassDecl {
+    label: "output",
+    shader: include_str!("../../../shaders/output.wgsl"),
+    first_binding: 0,
+    bindings: &[
+        uniform("frame.uniform"),
+        read("frame.color"),
+        read("sampling.flags"),
+        read("sampling.probability"),
+        write("output.final"),
+    ],
+    attachments: &[],
+    entry_points: &["main"],
+};
 
-pub fn new(device: &wgpu::Device) -> FramePass {
-    FramePass::new(
-        device,
-        "output",
-        SHADER,
-        &[
-            gpu::uniform(0, false),
-            gpu::storage_buffer(1, true),
-            gpu::storage_buffer(2, true),
-            gpu::storage_buffer(3, true),
-            gpu::storage_buffer(4, false),
-        ],
-    )
+pub fn record(f: &mut Recorder) -> Result<(), GraphError> {
+    f.run_frame_pass(&PASS)
 }
 
 /// Marker ring radius and thickness in pixels: about 3% of the shorter side, never so small

@@ -1,18 +1,16 @@
-//! Light-space photons and their pyramid (seed 000): the translucent objects rendered from the
-//! light into a photon map, then reduced level by level into a quad-tree of clusters. Depends
-//! on geometry and light only, so it is built once per static scene and shared by every frame.
+//! Light-space photons (seed 000): the translucent objects rendered from the light into a
+//! photon map, which the pyramid pass (`pyramid.rs`) reduces into a quad-tree of clusters.
+//! Depends on geometry and light only, so it is built once per static scene and shared by
+//! every frame.
 
 use glam::{Mat4, Vec3};
 
-use crate::render::gpu::{self, FLOAT};
-use crate::render::pass::gbuffer::{MeshBuffers, GI_LAYOUT, IRRADIANCE, VERTEX_LAYOUT};
+use super::gbuffer::{MeshBuffers, GI_LAYOUT, IRRADIANCE, VERTEX_LAYOUT};
+use super::pyramid;
+use crate::render::gpu;
+use crate::render::graph::{read, uniform, GraphError, PassDecl, Pipelines, Resources, Routes};
 use crate::render::timer::PassTimer;
 use crate::scene::Scene;
-
-pub const PHOTON_SHADER: &str = include_str!("../../../shaders/photons.wgsl");
-pub const PYRAMID_SHADER: &str = include_str!("../../../shaders/pyramid.wgsl");
-pub const LABEL: &str = "photons";
-pub const PYRAMID_LABEL: &str = "pyramid";
 
 /// Photon map side: 64² photons. Light spreads millimetres in the shipped media, and a bunny
 /// texel covers ~1.6 mm, so finer maps add cost, not detail (measured in the bench).
@@ -21,7 +19,21 @@ pub const SIDE: u32 = 64;
 pub const LEVELS: u32 = 7;
 /// Traversal starts from the 4×4 level (seed 000 starts from 8×8 of a 512² map).
 pub const START_LEVEL: u32 = 4;
-const SLOT: u64 = 256;
+
+pub const PASS: PassDecl = PassDecl {
+    label: "photons",
+    shader: include_str!("../../../shaders/photons.wgsl"),
+    // Binding 0 is the frame uniform of the shared prelude, which the photon pass never uses.
+    first_binding: 1,
+    bindings: &[uniform("photons.uniform"), read("materials.scene")],
+    attachments: &[
+        "photons.position",
+        "photons.normal",
+        "photons.irradiance",
+        "photons.depth",
+    ],
+    entry_points: &["vs_main", "fs_main"],
+};
 
 #[repr(C)]
 #[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
@@ -38,27 +50,19 @@ pub fn node_count() -> u64 {
         .sum()
 }
 
-pub struct PhotonPass {
-    raster: wgpu::RenderPipeline,
-    raster_layout: wgpu::BindGroupLayout,
-    leaves: wgpu::ComputePipeline,
-    reduce: wgpu::ComputePipeline,
-    pyramid_layout: wgpu::BindGroupLayout,
-}
-
-/// One scene's photon pyramid on the GPU.
+/// One scene's photon map and pyramid on the GPU.
 pub struct PhotonMap {
-    pub nodes: wgpu::Buffer,
-    uniform: wgpu::Buffer,
-    levels: wgpu::Buffer,
-    position: wgpu::TextureView,
-    normal: wgpu::TextureView,
-    irradiance: wgpu::TextureView,
-    depth: wgpu::TextureView,
+    pub resources: Resources,
     raster_bind: wgpu::BindGroup,
     pyramid_bind: wgpu::BindGroup,
     /// What it was built for.
     pub built_for: Option<PhotonInputs>,
+}
+
+impl PhotonMap {
+    pub fn nodes(&self) -> Option<&wgpu::Buffer> {
+        self.resources.get_buffer("photons.nodes")
+    }
 }
 
 /// What a photon map depends on besides the scene: the light's direction and radiosity's
@@ -70,111 +74,77 @@ pub struct PhotonInputs {
     pub indirect: bool,
 }
 
-impl PhotonPass {
-    pub fn new(device: &wgpu::Device) -> PhotonPass {
-        let module = gpu::shader(device, LABEL, PHOTON_SHADER);
-        let raster_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some(LABEL),
-            entries: &[gpu::uniform(1, false), gpu::storage_buffer(2, true)],
-        });
-        let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-            label: Some(LABEL),
-            bind_group_layouts: &[Some(&raster_layout)],
-            immediate_size: 0,
-        });
-        let target = |f: wgpu::TextureFormat| Some(wgpu::ColorTargetState::from(f));
-        let raster = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-            label: Some(LABEL),
-            layout: Some(&pipeline_layout),
-            vertex: wgpu::VertexState {
-                module: &module,
-                entry_point: Some("vs_main"),
-                compilation_options: Default::default(),
-                buffers: &[Some(VERTEX_LAYOUT), Some(GI_LAYOUT)],
-            },
-            // Both faces: the light may see an object's inside through an open mesh.
-            primitive: wgpu::PrimitiveState {
-                cull_mode: None,
-                ..Default::default()
-            },
-            depth_stencil: Some(wgpu::DepthStencilState {
-                format: wgpu::TextureFormat::Depth32Float,
-                depth_write_enabled: Some(true),
-                depth_compare: Some(wgpu::CompareFunction::Less),
-                stencil: Default::default(),
-                bias: Default::default(),
-            }),
-            multisample: Default::default(),
-            fragment: Some(wgpu::FragmentState {
-                module: &module,
-                entry_point: Some("fs_main"),
-                compilation_options: Default::default(),
-                targets: &[
-                    target(wgpu::TextureFormat::Rgba32Float),
-                    target(wgpu::TextureFormat::Rgba32Float),
-                    target(IRRADIANCE),
-                ],
-            }),
-            multiview_mask: None,
-            cache: None,
-        });
-        let pyramid_module = gpu::shader(device, PYRAMID_LABEL, PYRAMID_SHADER);
-        let pyramid_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some(PYRAMID_LABEL),
-            entries: &[
-                gpu::uniform(1, true),
-                gpu::uniform(2, false),
-                gpu::storage_buffer(3, true),
-                gpu::texture(4, FLOAT),
-                gpu::texture(5, FLOAT),
-                gpu::storage_buffer(6, false),
-                gpu::texture(7, FLOAT),
+fn raster_pipeline(device: &wgpu::Device, pipelines: &mut Pipelines) -> wgpu::RenderPipeline {
+    let layout = pipelines.layout(&PASS);
+    let module = pipelines.module(&PASS);
+    let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+        label: Some(PASS.label),
+        bind_group_layouts: &[Some(&layout)],
+        immediate_size: 0,
+    });
+    let target = |f: wgpu::TextureFormat| Some(wgpu::ColorTargetState::from(f));
+    device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+        label: Some(PASS.label),
+        layout: Some(&pipeline_layout),
+        vertex: wgpu::VertexState {
+            module: &module,
+            entry_point: Some("vs_main"),
+            compilation_options: Default::default(),
+            buffers: &[Some(VERTEX_LAYOUT), Some(GI_LAYOUT)],
+        },
+        // Both faces: the light may see an object's inside through an open mesh.
+        primitive: wgpu::PrimitiveState {
+            cull_mode: None,
+            ..Default::default()
+        },
+        depth_stencil: Some(wgpu::DepthStencilState {
+            format: wgpu::TextureFormat::Depth32Float,
+            depth_write_enabled: Some(true),
+            depth_compare: Some(wgpu::CompareFunction::Less),
+            stencil: Default::default(),
+            bias: Default::default(),
+        }),
+        multisample: Default::default(),
+        fragment: Some(wgpu::FragmentState {
+            module: &module,
+            entry_point: Some("fs_main"),
+            compilation_options: Default::default(),
+            targets: &[
+                target(wgpu::TextureFormat::Rgba32Float),
+                target(wgpu::TextureFormat::Rgba32Float),
+                target(IRRADIANCE),
             ],
-        });
-        let leaves = gpu::compute_pipeline(
-            device,
-            "pyramid.leaves",
-            &pyramid_module,
-            "leaves",
-            &pyramid_layout,
-        );
-        let reduce = gpu::compute_pipeline(
-            device,
-            "pyramid.reduce",
-            &pyramid_module,
-            "reduce",
-            &pyramid_layout,
-        );
+        }),
+        multiview_mask: None,
+        cache: None,
+    })
+}
+
+/// The photon and pyramid pipelines (shared by every scene).
+pub struct PhotonPass {
+    raster: wgpu::RenderPipeline,
+    pyramid: pyramid::PyramidPipelines,
+}
+
+impl PhotonPass {
+    pub fn new(device: &wgpu::Device, pipelines: &mut Pipelines) -> PhotonPass {
         PhotonPass {
-            raster,
-            raster_layout,
-            leaves,
-            reduce,
-            pyramid_layout,
+            raster: raster_pipeline(device, pipelines),
+            pyramid: pyramid::PyramidPipelines::new(pipelines),
         }
     }
 
     /// Allocates a scene's photon map; `materials` must mark every translucent material.
-    pub fn create_map(&self, device: &wgpu::Device, materials: &wgpu::Buffer) -> PhotonMap {
-        let tex =
-            |label, format, usage| gpu::texture_2d(device, label, (SIDE, SIDE), format, usage);
+    pub fn create_map(
+        &self,
+        device: &wgpu::Device,
+        pipelines: &mut Pipelines,
+        materials: &wgpu::Buffer,
+    ) -> Result<PhotonMap, GraphError> {
+        use wgpu::BufferUsages as B;
+        use wgpu::TextureFormat as F;
         let usage = wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::TEXTURE_BINDING;
-        let position = gpu::view(&tex(
-            "photons.position",
-            wgpu::TextureFormat::Rgba32Float,
-            usage,
-        ));
-        let normal = gpu::view(&tex(
-            "photons.normal",
-            wgpu::TextureFormat::Rgba32Float,
-            usage,
-        ));
-        let irradiance = gpu::view(&tex("photons.irradiance", IRRADIANCE, usage));
-        let depth = gpu::view(&tex(
-            "photons.depth",
-            wgpu::TextureFormat::Depth32Float,
-            wgpu::TextureUsages::RENDER_ATTACHMENT,
-        ));
+        let tex = |label, format, usage| gpu::texture_2d(device, label, (SIDE, SIDE), format, usage);
         let buffer = |label, size: u64, usage| {
             device.create_buffer(&wgpu::BufferDescriptor {
                 label: Some(label),
@@ -183,61 +153,37 @@ impl PhotonPass {
                 mapped_at_creation: false,
             })
         };
-        use wgpu::BufferUsages as B;
-        let nodes = buffer("pyramid.nodes", node_count() * 32, B::STORAGE | B::COPY_SRC);
-        let uniform = buffer(
-            "photons.uniform",
-            std::mem::size_of::<PhotonUniform>() as u64,
-            B::UNIFORM | B::COPY_DST,
-        );
-        let levels = buffer(
-            "pyramid.levels",
-            SLOT * u64::from(LEVELS),
-            B::UNIFORM | B::COPY_DST,
-        );
-        let raster_bind = gpu::bind_at(
+        let mut r = Resources::default();
+        r.texture("photons.position", tex("photons.position", F::Rgba32Float, usage));
+        r.texture("photons.normal", tex("photons.normal", F::Rgba32Float, usage));
+        r.texture("photons.irradiance", tex("photons.irradiance", IRRADIANCE, usage));
+        let depth_usage = wgpu::TextureUsages::RENDER_ATTACHMENT;
+        r.texture("photons.depth", tex("photons.depth", F::Depth32Float, depth_usage));
+        let nodes = buffer("photons.nodes", node_count() * 32, B::STORAGE | B::COPY_SRC);
+        r.buffer("photons.nodes", nodes);
+        let uniform_size = std::mem::size_of::<PhotonUniform>() as u64;
+        let uniform = buffer("photons.uniform", uniform_size, B::UNIFORM | B::COPY_DST);
+        r.buffer("photons.uniform", uniform);
+        let levels = pyramid::SLOT * u64::from(LEVELS);
+        r.buffer("pyramid.levels", buffer("pyramid.levels", levels, B::UNIFORM | B::COPY_DST));
+        r.buffer("materials.scene", materials.clone());
+        let routes = Routes::default();
+        let raster_bind = r.bind(device, &pipelines.layout(&PASS), &PASS, &routes)?;
+        let pyramid_bind = r.bind(
             device,
-            LABEL,
-            &self.raster_layout,
-            &[
-                (1, uniform.as_entire_binding()),
-                (2, materials.as_entire_binding()),
-            ],
-        );
-        let level_binding = wgpu::BindingResource::Buffer(wgpu::BufferBinding {
-            buffer: &levels,
-            offset: 0,
-            size: wgpu::BufferSize::new(16),
-        });
-        let pyramid_bind = gpu::bind_at(
-            device,
-            PYRAMID_LABEL,
-            &self.pyramid_layout,
-            &[
-                (1, level_binding),
-                (2, uniform.as_entire_binding()),
-                (3, materials.as_entire_binding()),
-                (4, wgpu::BindingResource::TextureView(&position)),
-                (5, wgpu::BindingResource::TextureView(&normal)),
-                (6, nodes.as_entire_binding()),
-                (7, wgpu::BindingResource::TextureView(&irradiance)),
-            ],
-        );
-        PhotonMap {
-            nodes,
-            uniform,
-            levels,
-            position,
-            normal,
-            irradiance,
-            depth,
+            &pipelines.layout(&pyramid::PASS),
+            &pyramid::PASS,
+            &routes,
+        )?;
+        Ok(PhotonMap {
+            resources: r,
             raster_bind,
             pyramid_bind,
             built_for: None,
-        }
+        })
     }
 
-    /// Renders the photon map for light direction `to_light` and builds the pyramid.
+    /// Renders the photon map for the light direction in `inputs` and builds the pyramid.
     #[allow(clippy::too_many_arguments)]
     pub fn build(
         &self,
@@ -248,72 +194,50 @@ impl PhotonPass {
         mesh: &MeshBuffers,
         inputs: PhotonInputs,
         timer: &mut PassTimer,
-    ) {
-        let to_light = inputs.to_light;
-        // An orthographic light camera around the translucent objects' bounding sphere.
-        let (centre, radius) = translucent_bounds(scene);
-        let up = if to_light.cross(Vec3::Y).length() < 1e-3 {
-            Vec3::X
-        } else {
-            Vec3::Y
+    ) -> Result<(), GraphError> {
+        let missing = |name| GraphError::Missing {
+            pass: PASS.label,
+            name,
         };
-        let view = Mat4::look_at_rh(centre + to_light * (radius + 1.0), centre, up);
-        let proj =
-            Mat4::orthographic_rh(-radius, radius, -radius, radius, 0.01, 2.0 * radius + 2.0);
-        let texel = 2.0 * radius / SIDE as f32;
-        let mm = scene.file.mm_per_unit as f32;
-        let light = scene.file.light;
-        let u = PhotonUniform {
-            light_view_proj: (proj * view).to_cols_array_2d(),
-            to_light: to_light
-                .extend(f32::from(u8::from(inputs.indirect)))
-                .to_array(),
-            light: (Vec3::from(light.color) * light.intensity)
-                .extend(0.0)
-                .to_array(),
-            params: [SIDE as f32, (texel * mm) * (texel * mm), texel, 0.0],
+        let uniform = map
+            .resources
+            .get_buffer("photons.uniform")
+            .ok_or(missing("photons.uniform"))?;
+        queue.write_buffer(uniform, 0, bytemuck::bytes_of(&photon_uniform(scene, inputs)));
+        let view = |name| {
+            map.resources
+                .get_texture(name)
+                .map(|(_, v)| v)
+                .ok_or(missing(name))
         };
-        queue.write_buffer(&map.uniform, 0, bytemuck::bytes_of(&u));
-        let mut slots = vec![0u8; (SLOT * u64::from(LEVELS)) as usize];
-        let mut offset = 0u32;
-        let mut below = 0u32;
-        for l in 0..LEVELS {
-            let side = (SIDE >> l).max(1);
-            let v = [l, side, offset, below];
-            let at = (SLOT * u64::from(l)) as usize;
-            slots[at..at + 16].copy_from_slice(bytemuck::cast_slice(&v));
-            below = offset;
-            offset += side * side;
-        }
-        queue.write_buffer(&map.levels, 0, &slots);
+        let attach = |view| {
+            Some(wgpu::RenderPassColorAttachment {
+                view,
+                depth_slice: None,
+                resolve_target: None,
+                ops: wgpu::Operations {
+                    load: wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT),
+                    store: wgpu::StoreOp::Store,
+                },
+            })
+        };
         {
-            let attach = |view| {
-                Some(wgpu::RenderPassColorAttachment {
-                    view,
-                    depth_slice: None,
-                    resolve_target: None,
-                    ops: wgpu::Operations {
-                        load: wgpu::LoadOp::Clear(wgpu::Color::TRANSPARENT),
-                        store: wgpu::StoreOp::Store,
-                    },
-                })
-            };
             let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-                label: Some(LABEL),
+                label: Some(PASS.label),
                 color_attachments: &[
-                    attach(&map.position),
-                    attach(&map.normal),
-                    attach(&map.irradiance),
+                    attach(view("photons.position")?),
+                    attach(view("photons.normal")?),
+                    attach(view("photons.irradiance")?),
                 ],
                 depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
-                    view: &map.depth,
+                    view: view("photons.depth")?,
                     depth_ops: Some(wgpu::Operations {
                         load: wgpu::LoadOp::Clear(1.0),
                         store: wgpu::StoreOp::Store,
                     }),
                     stencil_ops: None,
                 }),
-                timestamp_writes: timer.render(LABEL),
+                timestamp_writes: timer.render(PASS.label),
                 occlusion_query_set: None,
                 multiview_mask: None,
             });
@@ -324,17 +248,40 @@ impl PhotonPass {
             pass.set_index_buffer(mesh.indices.slice(..), wgpu::IndexFormat::Uint32);
             pass.draw_indexed(0..mesh.index_count, 0, 0..1);
         }
-        let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
-            label: Some(PYRAMID_LABEL),
-            timestamp_writes: timer.compute(PYRAMID_LABEL),
-        });
-        for l in 0..LEVELS {
-            let side = (SIDE >> l).max(1);
-            pass.set_pipeline(if l == 0 { &self.leaves } else { &self.reduce });
-            pass.set_bind_group(0, &map.pyramid_bind, &[(SLOT * u64::from(l)) as u32]);
-            pass.dispatch_workgroups(side.div_ceil(8), side.div_ceil(8), 1);
-        }
+        let levels = map
+            .resources
+            .get_buffer("pyramid.levels")
+            .ok_or(missing("pyramid.levels"))?;
+        self.pyramid
+            .record(queue, encoder, levels, &map.pyramid_bind, timer);
         map.built_for = Some(inputs);
+        Ok(())
+    }
+}
+
+/// The light camera: orthographic, around the translucent objects' bounding sphere.
+fn photon_uniform(scene: &Scene, inputs: PhotonInputs) -> PhotonUniform {
+    let to_light = inputs.to_light;
+    let (centre, radius) = translucent_bounds(scene);
+    let up = if to_light.cross(Vec3::Y).length() < 1e-3 {
+        Vec3::X
+    } else {
+        Vec3::Y
+    };
+    let view = Mat4::look_at_rh(centre + to_light * (radius + 1.0), centre, up);
+    let proj = Mat4::orthographic_rh(-radius, radius, -radius, radius, 0.01, 2.0 * radius + 2.0);
+    let texel = 2.0 * radius / SIDE as f32;
+    let mm = scene.file.mm_per_unit as f32;
+    let light = scene.file.light;
+    PhotonUniform {
+        light_view_proj: (proj * view).to_cols_array_2d(),
+        to_light: to_light
+            .extend(f32::from(u8::from(inputs.indirect)))
+            .to_array(),
+        light: (Vec3::from(light.color) * light.intensity)
+            .extend(0.0)
+            .to_array(),
+        params: [SIDE as f32, (texel * mm) * (texel * mm), texel, 0.0],
     }
 }
 

@@ -1,23 +1,28 @@
 //! Resolve pass: background, shaded and reused pixels as they are, the rest reconstructed from
 //! the jump-flooding result (nearest sample or windowed approximate Sibson).
 
-use crate::render::gpu::{self, FramePass, FLOAT};
+use crate::render::graph::{read, texture, uniform, write, GraphError, PassDecl, Recorder};
 
-pub const SHADER: &str = include_str!("../../../shaders/resolve.wgsl");
+pub const PASS: PassDecl = PassDecl {
+    label: "resolve",
+    shader: include_str!("../../../shaders/resolve.wgsl"),
+    first_binding: 0,
+    bindings: &[
+        uniform("frame.uniform"),
+        read("shade.color"),
+        read("jfa.nearest"),
+        texture("gbuffer.albedo"),
+        write("resolve.color"),
+        texture("gbuffer.normal_distance"),
+        read("sampling.flags"),
+    ],
+    attachments: &[],
+    entry_points: &["main"],
+};
 
-pub fn new(device: &wgpu::Device) -> FramePass {
-    FramePass::new(
-        device,
-        "resolve",
-        SHADER,
-        &[
-            gpu::uniform(0, false),
-            gpu::storage_buffer(1, true),
-            gpu::storage_buffer(2, true),
-            gpu::texture(3, FLOAT),
-            gpu::storage_buffer(4, false),
-            gpu::texture(5, FLOAT),
-            gpu::storage_buffer(6, true),
-        ],
-    )
+/// Fills the frame; from here on `frame.color` is the resolved colour.
+pub fn record(f: &mut Recorder) -> Result<(), GraphError> {
+    f.run_frame_pass(&PASS)?;
+    f.route("frame.color", "resolve.color");
+    Ok(())
 }

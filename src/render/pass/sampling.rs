@@ -2,27 +2,28 @@
 //! blue- or white-noise decision, and the reprojection cache test for pixels not chosen.
 //! Writes probability, flags, reused colours and the seeds jump flooding starts from.
 
-use crate::render::gpu::{self, FramePass, FLOAT};
+use crate::render::graph::{read, texture, uniform, write, GraphError, PassDecl, Recorder};
 
-pub const SHADER: &str = include_str!("../../../shaders/sampling.wgsl");
+pub const PASS: PassDecl = PassDecl {
+    label: "sampling",
+    shader: include_str!("../../../shaders/sampling.wgsl"),
+    first_binding: 0,
+    bindings: &[
+        uniform("frame.uniform"),
+        texture("gbuffer.normal_distance"),
+        texture("gbuffer.albedo"),
+        texture("sampling.rank_map"),
+        read("history.color"),
+        texture("history.normal_distance"),
+        write("sampling.probability"),
+        write("sampling.flags"),
+        write("shade.color"),
+        write("sampling.seeds"),
+    ],
+    attachments: &[],
+    entry_points: &["main"],
+};
 
-pub fn new(device: &wgpu::Device) -> FramePass {
-    FramePass::new(
-        device,
-        "sampling",
-        SHADER,
-        &[
-            gpu::uniform(0, false),
-            gpu::texture(1, FLOAT),
-            gpu::texture(2, FLOAT),
-            gpu::storage_buffer(3, true),
-            gpu::texture(4, FLOAT),
-            gpu::storage_buffer(5, true),
-            gpu::texture(6, FLOAT),
-            gpu::storage_buffer(7, false),
-            gpu::storage_buffer(8, false),
-            gpu::storage_buffer(9, false),
-            gpu::storage_buffer(10, false),
-        ],
-    )
+pub fn record(f: &mut Recorder) -> Result<(), GraphError> {
+    f.run_frame_pass(&PASS)
 }

@@ -1,0 +1,144 @@
+//! One frame, in order. [`record`] reads like the frame itself: each line is a pass (its file
+//! in `render/pass/` declares what it reads and writes), and the [`FramePlan`] decides which
+//! optional passes run. `frame.color` is the port every colour consumer reads: the shading
+//! result, replaced by the resolved and then the blurred colour when those passes run.
+//!
+//! Adding a pass: a file in `render/pass/` with its `PASS` declaration and `record`, its shader,
+//! one line in [`record`] and its entry in [`PASSES`] (which the naga test and the architecture
+//! doc read).
+
+use super::graph::{GraphError, PassDecl, Recorder};
+use super::pass::gbuffer::MeshBuffers;
+use super::pass::{
+    compact, dof, gbuffer, jfa, output, photons, pyramid, resolve, sampling, screen_diffusion,
+    shade,
+};
+use super::request::MIN_XI;
+use crate::foveation::reconstruct::frame_jfa_steps;
+use crate::settings::{RenderSettings, Rung};
+
+/// Every pass the renderer has, in the order a frame meets them (photons and pyramid run once
+/// per static scene, before the frame that first needs them).
+pub const PASSES: [&PassDecl; 11] = [
+    &photons::PASS,
+    &pyramid::PASS,
+    &gbuffer::PASS,
+    &screen_diffusion::PASS,
+    &sampling::PASS,
+    &compact::PASS,
+    &shade::PASS,
+    &jfa::PASS,
+    &resolve::PASS,
+    &dof::PASS,
+    &output::PASS,
+];
+
+/// Which optional passes a frame runs.
+#[derive(Debug, Clone, PartialEq)]
+pub struct FramePlan {
+    /// Screen-space diffusion: the screen rung, and the scene plan gives something a dipole.
+    pub screen_diffusion: bool,
+    pub foveated: bool,
+    /// Shade a compacted list rather than a masked full-frame dispatch.
+    pub compaction: bool,
+    pub dof: bool,
+    /// Jump sizes of the JFA steps (foveated frames).
+    pub jfa_steps: Vec<u32>,
+}
+
+impl FramePlan {
+    pub fn of(s: &RenderSettings, width: u32, height: u32, needs_dipole: bool) -> FramePlan {
+        let fov = &s.foveation;
+        FramePlan {
+            screen_diffusion: s.translucency.rung == Rung::Screen && needs_dipole,
+            foveated: fov.enabled,
+            compaction: fov.compaction,
+            dof: s.dof,
+            jfa_steps: if fov.enabled {
+                frame_jfa_steps(width, height, fov.min_probability, MIN_XI)
+            } else {
+                Vec::new()
+            },
+        }
+    }
+}
+
+/// Records the frame's passes into `f`'s encoder.
+pub fn record(f: &mut Recorder, plan: &FramePlan, mesh: &MeshBuffers) -> Result<(), GraphError> {
+    gbuffer::record(f, mesh)?;
+    if plan.screen_diffusion {
+        screen_diffusion::record(f)?;
+    }
+    f.route("frame.color", "shade.color");
+    if plan.foveated {
+        sampling::record(f)?;
+        // The list also counts the samples (the header's `sampled`), so it is built even when
+        // shading masks a full-frame dispatch instead of using it.
+        compact::record(f)?;
+        if plan.compaction {
+            shade::record_list(f)?;
+        } else {
+            shade::record_grid(f)?;
+        }
+        jfa::record(f, &plan.jfa_steps)?;
+        resolve::record(f)?;
+    } else {
+        shade::record_grid(f)?;
+    }
+    if plan.dof {
+        dof::record(f)?;
+    }
+    output::record(f)?;
+    keep_history(f)
+}
+
+/// What the next frame reuses: this frame's shaded colour and G-buffer normal + distance.
+pub const HISTORY: [(&str, &str); 2] = [
+    ("shade.color", "history.color"),
+    ("gbuffer.normal_distance", "history.normal_distance"),
+];
+
+fn keep_history(f: &mut Recorder) -> Result<(), GraphError> {
+    let missing = |name| GraphError::Missing {
+        pass: "history",
+        name,
+    };
+    let [(color, history_color), (nd, history_nd)] = HISTORY;
+    let (src, dst) = (f.buffer(color)?.clone(), f.buffer(history_color)?.clone());
+    f.encoder.copy_buffer_to_buffer(&src, 0, &dst, 0, src.size());
+    let src = f.resources.get_texture(nd).ok_or(missing(nd))?.0;
+    let dst = f.resources.get_texture(history_nd).ok_or(missing(history_nd))?.0;
+    f.encoder.copy_texture_to_texture(
+        src.as_image_copy(),
+        dst.as_image_copy(),
+        wgpu::Extent3d {
+            width: src.width(),
+            height: src.height(),
+            depth_or_array_layers: 1,
+        },
+    );
+    Ok(())
+}
+
+/// The passes with what each reads and writes, as `docs/architecture.md` carries it (a test
+/// checks the doc against this).
+pub fn passes_markdown() -> String {
+    let mut s = String::from("| # | pass | reads | writes |\n|---|---|---|---|\n");
+    for (i, d) in PASSES.iter().enumerate() {
+        let list = |names: Vec<&str>| {
+            names
+                .iter()
+                .map(|n| format!("`{n}`"))
+                .collect::<Vec<_>>()
+                .join(", ")
+        };
+        s.push_str(&format!(
+            "| {} | {} | {} | {} |\n",
+            i + 1,
+            d.label,
+            list(d.reads()),
+            list(d.writes())
+        ));
+    }
+    s
+}

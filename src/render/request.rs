@@ -1,0 +1,90 @@
+//! What the renderer is asked for and what it gives back: plain data, shared by the renderer,
+//! its thread and every caller.
+
+use glam::Vec3;
+
+use crate::foveation::rank_map;
+use crate::radiosity::Progress;
+use crate::scene::Camera;
+use crate::settings::RenderSettings;
+use crate::viewing::Display;
+
+/// Largest side a frame may have; matches wgpu's default 2-D texture limit.
+pub const MAX_SIDE: u32 = 8192;
+/// Smallest effective ξ: the rank-0 pixel of every 64×64 blue-noise tile is always shaded.
+pub const MIN_XI: f32 = 1.0 / (rank_map::TILE * rank_map::TILE) as f32;
+/// Pupil diameter assumed when a sample carries none: a typical indoor value.
+pub const DEFAULT_PUPIL_MM: f32 = 4.0;
+
+/// Everything that decides one frame's pixels.
+#[derive(Debug, Clone, PartialEq)]
+pub struct FrameRequest {
+    pub scene: String,
+    pub width: u32,
+    pub height: u32,
+    /// Normalised gaze (top-left origin) the frame is foveated around.
+    pub gaze: [f32; 2],
+    /// Draw the gaze marker at `gaze`.
+    pub marker: bool,
+    pub pupil_mm: f32,
+    pub display: Display,
+    pub settings: RenderSettings,
+    /// Overrides the scene light's direction (unit vector towards the light).
+    pub to_light: Option<Vec3>,
+    /// Overrides the scene camera.
+    pub camera: Option<Camera>,
+    /// Whose frame sequence this is: history (reprojection) is kept per stream.
+    pub stream: u64,
+    /// Seconds into the stream, for animated lights.
+    pub time_s: f64,
+}
+
+impl FrameRequest {
+    pub fn new(scene: &str, width: u32, height: u32) -> FrameRequest {
+        FrameRequest {
+            scene: scene.to_string(),
+            width,
+            height,
+            gaze: [0.5, 0.5],
+            marker: false,
+            pupil_mm: DEFAULT_PUPIL_MM,
+            display: Display::default(),
+            settings: RenderSettings::default(),
+            to_light: None,
+            camera: None,
+            stream: 0,
+            time_s: 0.0,
+        }
+    }
+}
+
+/// A rendered frame in host memory.
+#[derive(Debug, Clone)]
+pub struct RenderedFrame {
+    pub width: u32,
+    pub height: u32,
+    /// Tightly packed RGBA8, sRGB-encoded, top row first.
+    pub rgba: Vec<u8>,
+    /// Fraction of the frame's pixels the shading pass ran for.
+    pub sampled: f64,
+    pub render_ms: f64,
+    pub readback_ms: f64,
+    /// GPU milliseconds per pass label (empty without timestamp queries).
+    pub passes_ms: std::collections::BTreeMap<String, f64>,
+    /// Where the scene's radiosity solve stood when this frame used it; `None` without one.
+    pub radiosity: Option<Progress>,
+}
+
+/// Intermediate images of the last frame of a stream, for tests and diagnostics.
+#[derive(Debug, Clone)]
+pub struct Inspection {
+    pub probability: Vec<f32>,
+    pub flags: Vec<u32>,
+    pub seeds: Vec<u32>,
+    pub nearest: Vec<u32>,
+    pub color: Vec<[f32; 4]>,
+    pub resolved: Vec<[f32; 4]>,
+    pub normal_distance: Vec<[f32; 4]>,
+    /// Photons (pyramid level 0) as [x, y, z, extent, Φr, Φg, Φb, weight]; empty without any.
+    pub photons: Vec<[f32; 8]>,
+}

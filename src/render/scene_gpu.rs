@@ -1,0 +1,68 @@
+//! A scene on the GPU: its mesh, materials, photon map (when something is translucent) and
+//! radiosity solve (when its plan asks for one), and the resources every stream of it binds.
+
+use super::gi::start_radiosity;
+use super::graph::{GraphError, Pipelines, Resources};
+use super::pass::gbuffer::{self, MeshBuffers};
+use super::pass::photons::{PhotonMap, PhotonPass};
+use crate::radiosity::{Progress, RadiosityHandle};
+use crate::scene::Scene;
+
+pub struct SceneGpu {
+    pub scene: Scene,
+    pub mesh: MeshBuffers,
+    pub photons: Option<PhotonMap>,
+    /// `materials.scene` (every translucent material marked subsurface, for the G-buffer and
+    /// the photon map), `scene.reach`, and `photons.nodes` (a stand-in without photons).
+    pub resources: Resources,
+    /// The scene's radiosity solve, when its plan asks for one, and the snapshot uploaded.
+    pub radiosity: Option<RadiosityHandle>,
+    pub gi: Option<Progress>,
+    pub gi_version: u64,
+}
+
+impl SceneGpu {
+    pub fn upload(
+        device: &wgpu::Device,
+        pipelines: &mut Pipelines,
+        photon_pass: &PhotonPass,
+        scene: Scene,
+    ) -> Result<SceneGpu, GraphError> {
+        let mesh = gbuffer::upload(device, &scene);
+        let materials = super::materials::upload(
+            device,
+            "materials.scene",
+            &super::materials::gpu_materials(&scene, None),
+        );
+        let photons = if scene.has_translucency() {
+            Some(photon_pass.create_map(device, pipelines, &materials)?)
+        } else {
+            None
+        };
+        let mut resources = Resources::default();
+        resources.buffer("scene.reach", super::materials::upload_reach(device, &scene));
+        let nodes = match photons.as_ref().and_then(PhotonMap::nodes) {
+            Some(nodes) => nodes.clone(),
+            // Bound in place of the pyramid when the scene has none.
+            None => device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("photons.none"),
+                size: 32,
+                usage: wgpu::BufferUsages::STORAGE,
+                mapped_at_creation: false,
+            }),
+        };
+        resources.buffer("photons.nodes", nodes);
+        resources.buffer("materials.scene", materials);
+        tracing::info!(scene = %scene.name(), triangles = scene.mesh.triangle_count(), translucent = scene.has_translucency(), "scene loaded");
+        let radiosity = start_radiosity(&scene);
+        Ok(SceneGpu {
+            scene,
+            mesh,
+            photons,
+            resources,
+            radiosity,
+            gi: None,
+            gi_version: 0,
+        })
+    }
+}
