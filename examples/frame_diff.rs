@@ -6,8 +6,8 @@
 use std::path::Path;
 
 use anyhow::{bail, Context, Result};
-use fovea::viewing::Viewing;
 use fovea::quality::{flip_map, pixels_per_degree};
+use fovea::viewing::Viewing;
 
 const TOLERANCE: f64 = 0.001;
 
@@ -38,7 +38,10 @@ fn main() -> Result<()> {
         let (a, w, h) = load(&Path::new(before).join(name))?;
         let (b, w2, h2) = load(&Path::new(after).join(name))?;
         if (w, h) != (w2, h2) {
-            bail!("{}: {w}x{h} before, {w2}x{h2} after", name.to_string_lossy());
+            bail!(
+                "{}: {w}x{h} before, {w2}x{h2} after",
+                name.to_string_lossy()
+            );
         }
         if a == b {
             exact += 1;

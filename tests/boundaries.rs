@@ -6,13 +6,27 @@ use std::path::{Path, PathBuf};
 /// (module, modules it must not name). `settings` and `viewing` are leaves: they name nothing.
 const FORBIDDEN: &[(&str, &[&str])] = &[
     ("render", &["protocol", "server", "client", "bench", "gaze"]),
-    ("protocol", &["foveation", "render", "radiosity", "server", "client", "bench", "gaze"]),
+    (
+        "protocol",
+        &[
+            "foveation",
+            "render",
+            "radiosity",
+            "server",
+            "client",
+            "bench",
+            "gaze",
+        ],
+    ),
     ("settings", &["*"]),
     ("viewing", &["*"]),
     ("foveation", &["protocol", "render", "server", "client"]),
     ("radiosity", &["protocol", "render", "server", "client"]),
     ("scene", &["protocol", "render", "server", "client"]),
-    ("optics", &["protocol", "render", "server", "client", "foveation"]),
+    (
+        "optics",
+        &["protocol", "render", "server", "client", "foveation"],
+    ),
 ];
 
 fn rust_files(dir: &Path, out: &mut Vec<PathBuf>) {

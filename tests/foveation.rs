@@ -2,12 +2,12 @@
 
 use fovea::foveation::rank_map;
 use fovea::foveation::reconstruct::{jfa_with_steps, reconstruct, unpack, NO_SEED};
-use fovea::settings::{Noise, Reconstruction};
 use fovea::optics::acuity::{acuity_probability, mar_deg, ProbabilityForm};
-use fovea::viewing::Viewing;
 use fovea::render::uniforms::{FLAG_COVERED, FLAG_REUSED, FLAG_SAMPLED};
 use fovea::render::{FrameRequest, Inspection, Renderer};
 use fovea::scene::Scene;
+use fovea::settings::{Noise, Reconstruction};
+use fovea::viewing::Viewing;
 
 fn renderer() -> Renderer {
     Renderer::new().unwrap_or_else(|e| panic!("GPU tests need an adapter: {e}"))
@@ -15,7 +15,8 @@ fn renderer() -> Renderer {
 
 fn foveated(preset: &str, w: u32, h: u32, gaze: [f32; 2]) -> FrameRequest {
     let mut r = FrameRequest::new("bunny", w, h);
-    r.settings = fovea::settings::RenderSettings::of(fovea::settings::Preset::from_name(preset).unwrap());
+    r.settings =
+        fovea::settings::RenderSettings::of(fovea::settings::Preset::from_name(preset).unwrap());
     r.gaze = gaze;
     r
 }

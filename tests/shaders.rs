@@ -33,7 +33,9 @@ fn shader_bindings(
 ) -> Vec<(u32, String, Access, GlobalUse)> {
     let mut out = Vec::new();
     for (handle, var) in module.global_variables.iter() {
-        let Some(binding) = &var.binding else { continue };
+        let Some(binding) = &var.binding else {
+            continue;
+        };
         assert_eq!(binding.group, 0, "{}: only group 0 is used", decl.label);
         let access = match (var.space, &module.types[var.ty].inner) {
             (naga::AddressSpace::Uniform, _) => Access::Uniform,
@@ -89,7 +91,10 @@ fn declared_bindings_match_the_shaders() {
         let found = shader_bindings(decl, &module, &info);
         for (slot, b) in decl.numbered() {
             let Some((_, var, access, used)) = found.iter().find(|f| f.0 == slot) else {
-                panic!("{}: binding {slot} ({}) is not in the shader", decl.label, b.name);
+                panic!(
+                    "{}: binding {slot} ({}) is not in the shader",
+                    decl.label, b.name
+                );
             };
             let declared = match b.access {
                 Access::DynamicUniform { .. } => Access::Uniform,

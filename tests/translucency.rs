@@ -1,11 +1,11 @@
 //! The translucency ladder on the GPU: the dipole held to its CPU twin, the hierarchy to brute
 //! force, energy bounded, the pyramid cached, and every rung composed with foveation.
 
-use fovea::settings::Rung;
 use fovea::optics::dipole::{fresnel_transmittance, leaf_softening, softened_distance};
 use fovea::render::pass::photons::photon_radius_mm;
 use fovea::render::{FrameRequest, Inspection, Renderer};
 use fovea::scene::{Material, Scene};
+use fovea::settings::Rung;
 use glam::{Vec3, Vec4};
 
 fn renderer() -> Renderer {

@@ -2,9 +2,9 @@
 
 use serde::{Deserialize, Serialize};
 
-use crate::settings::{Noise, Preset, Reconstruction, RenderSettings, Rung};
 use crate::optics::acuity::ProbabilityForm;
 use crate::protocol::Codec;
+use crate::settings::{Noise, Preset, Reconstruction, RenderSettings, Rung};
 
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct BenchConfig {
@@ -28,7 +28,11 @@ impl BenchConfig {
         BenchConfig::variant_of("balanced", name, tweak)
     }
 
-    fn variant_of(preset: &str, name: String, tweak: impl FnOnce(&mut RenderSettings)) -> BenchConfig {
+    fn variant_of(
+        preset: &str,
+        name: String,
+        tweak: impl FnOnce(&mut RenderSettings),
+    ) -> BenchConfig {
         let mut c = BenchConfig::preset(preset).expect("a preset");
         tweak(&mut c.settings);
         c.name = name;

@@ -6,9 +6,9 @@ use std::path::Path;
 
 use serde::{Deserialize, Serialize};
 
-use crate::settings::RenderSettings;
 use crate::protocol::{Codec, Display};
 use crate::quality::Errors;
+use crate::settings::RenderSettings;
 
 /// Median and 10th/90th percentiles (nearest rank) of a set of samples.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]

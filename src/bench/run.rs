@@ -8,11 +8,11 @@ use std::time::Instant;
 use super::configs::BenchConfig;
 use super::report::{BenchRecord, BenchReport, Machine, Spread};
 use crate::encode;
-use crate::settings::{Preset, RenderSettings};
-use crate::viewing::Viewing;
 use crate::protocol::Display;
 use crate::quality::{self, Errors, Weighting};
 use crate::render::{FrameRequest, RenderError, Renderer};
+use crate::settings::{Preset, RenderSettings};
+use crate::viewing::Viewing;
 
 #[derive(Debug, Clone)]
 pub struct BenchOptions {

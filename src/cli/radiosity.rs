@@ -6,10 +6,10 @@ use std::time::{Duration, Instant};
 
 use anyhow::{bail, Context, Result};
 
-use fovea::settings::{Preset, RenderSettings};
 use fovea::radiosity::{Options, Solver, Stats};
 use fovea::render::{FrameRequest, Renderer};
 use fovea::scene::{Plan, RadiosityMode, Scene};
+use fovea::settings::{Preset, RenderSettings};
 
 use super::parse::parse_size;
 

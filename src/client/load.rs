@@ -13,8 +13,8 @@ use serde::Serialize;
 use tokio_tungstenite::tungstenite::Message;
 
 use crate::gaze::synthetic::{degrees_to_frame, SyntheticEye};
-use crate::viewing::Viewing;
 use crate::protocol::{decode_frame, Hello};
+use crate::viewing::Viewing;
 
 #[derive(Debug, Clone)]
 pub struct LoadOptions {

@@ -25,7 +25,6 @@ fn percentile(v: &mut [f64], q: f64) -> f64 {
     v[((q * (v.len() - 1) as f64).round() as usize).min(v.len() - 1)]
 }
 
-
 pub fn evaluate(samples: &[Sample], viewing: &Viewing, horizons: &[f64]) -> Vec<HorizonError> {
     let frame_deg = viewing.field_of_view_deg();
     let mut out = Vec::new();

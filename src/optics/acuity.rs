@@ -4,8 +4,6 @@
 //!
 //! Units: angles in degrees unless a name says radians; display sizes in centimetres.
 
-
-
 /// Linear MAR model (Strasburger; thesis Fig. 12): w(e) = m·e + w0, in degrees.
 pub fn mar_deg(e_deg: f64, slope: f64, w0_deg: f64) -> f64 {
     slope * e_deg + w0_deg

@@ -9,6 +9,8 @@ mod limits;
 mod messages;
 mod parse;
 
+/// The `settings` message is the knob list of [`crate::settings::knobs`].
+pub use crate::settings::SettingsPatch;
 pub use error::{ErrorCode, ProtocolError};
 pub use frame::{decode_frame, encode_frame, FrameHeader, GazeUsed, SolveProgress, StageTimes};
 pub use limits::Limits;
@@ -17,5 +19,3 @@ pub use messages::{
     PROTOCOL_VERSION,
 };
 pub use parse::{parse_client_message, ClientMessage};
-/// The `settings` message is the knob list of [`crate::settings::knobs`].
-pub use crate::settings::SettingsPatch;

@@ -1,8 +1,8 @@
 use serde::de::DeserializeOwned;
 use serde_json::{Map, Value};
 
-use crate::settings::{KnobError, SettingsPatch};
 use super::{Ack, ErrorCode, Gaze, Hello, Limits, ProtocolError, PROTOCOL_VERSION};
+use crate::settings::{KnobError, SettingsPatch};
 
 /// A client message that parsed and passed every range check.
 #[derive(Debug, Clone, PartialEq)]

@@ -105,9 +105,14 @@ fn keep_history(f: &mut Recorder) -> Result<(), GraphError> {
     };
     let [(color, history_color), (nd, history_nd)] = HISTORY;
     let (src, dst) = (f.buffer(color)?.clone(), f.buffer(history_color)?.clone());
-    f.encoder.copy_buffer_to_buffer(&src, 0, &dst, 0, src.size());
+    f.encoder
+        .copy_buffer_to_buffer(&src, 0, &dst, 0, src.size());
     let src = f.resources.get_texture(nd).ok_or(missing(nd))?.0;
-    let dst = f.resources.get_texture(history_nd).ok_or(missing(history_nd))?.0;
+    let dst = f
+        .resources
+        .get_texture(history_nd)
+        .ok_or(missing(history_nd))?
+        .0;
     f.encoder.copy_texture_to_texture(
         src.as_image_copy(),
         dst.as_image_copy(),

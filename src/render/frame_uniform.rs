@@ -9,10 +9,10 @@ use super::uniforms::*;
 use crate::foveation::rank_map;
 use crate::foveation::reprojection::DEFAULT_EPSILON;
 use crate::optics::acuity::mar_deg;
-use crate::settings::{Noise, Reconstruction};
-use crate::viewing::Viewing;
 use crate::optics::color::srgb8_to_linear;
 use crate::scene::{Camera, Scene};
+use crate::settings::{Noise, Reconstruction};
+use crate::viewing::Viewing;
 
 /// The R2 low-discrepancy sequence: tile offsets that cover the tile evenly over frames.
 fn tile_offset(frame: u32) -> [u32; 2] {

@@ -29,9 +29,7 @@ pub mod uniforms;
 
 pub use device::Gpu;
 pub use renderer::Renderer;
-pub use request::{
-    FrameRequest, Inspection, RenderedFrame, DEFAULT_PUPIL_MM, MAX_SIDE, MIN_XI,
-};
+pub use request::{FrameRequest, Inspection, RenderedFrame, DEFAULT_PUPIL_MM, MAX_SIDE, MIN_XI};
 pub use thread::{RenderHandle, RenderThread, Rendered};
 
 #[derive(Debug, thiserror::Error)]

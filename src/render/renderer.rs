@@ -217,9 +217,12 @@ impl Renderer {
             gi_version: sg.gi_version,
             indirect: req.settings.indirect,
         };
-        let needs = self.targets[ti].1.needs_dipole
-            && req.settings.translucency.rung >= Rung::Hierarchical;
-        let Some(map) = sg.photons.as_mut().filter(|m| needs && m.built_for != Some(inputs))
+        let needs =
+            self.targets[ti].1.needs_dipole && req.settings.translucency.rung >= Rung::Hierarchical;
+        let Some(map) = sg
+            .photons
+            .as_mut()
+            .filter(|m| needs && m.built_for != Some(inputs))
         else {
             return Ok((None, inputs));
         };
@@ -331,8 +334,9 @@ impl Renderer {
             probability: f32s(buf("sampling.probability")?),
             flags: u32s(buf("sampling.flags")?),
             seeds: u32s(buf("sampling.seeds")?),
-            nearest: u32s(buf(t.routes.resolve("jfa.nearest"))
-                .or_else(|_| buf("jfa.seeds[ping]"))?),
+            nearest: u32s(
+                buf(t.routes.resolve("jfa.nearest")).or_else(|_| buf("jfa.seeds[ping]"))?,
+            ),
             color: quads(buf("shade.color")?),
             resolved: quads(buf("resolve.color")?),
             normal_distance: quads(read_texture(

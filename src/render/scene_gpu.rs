@@ -40,7 +40,10 @@ impl SceneGpu {
             None
         };
         let mut resources = Resources::default();
-        resources.buffer("scene.reach", super::materials::upload_reach(device, &scene));
+        resources.buffer(
+            "scene.reach",
+            super::materials::upload_reach(device, &scene),
+        );
         let nodes = match photons.as_ref().and_then(PhotonMap::nodes) {
             Some(nodes) => nodes.clone(),
             // Bound in place of the pyramid when the scene has none.

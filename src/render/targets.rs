@@ -94,7 +94,10 @@ impl FrameTargets {
         }
         // `[count, workgroups x, y, z]` for the indirect shading dispatch.
         let counter_usage = B::STORAGE | B::INDIRECT | B::COPY_SRC | B::COPY_DST;
-        r.buffer("compact.counter", buffer("compact.counter", 16, counter_usage));
+        r.buffer(
+            "compact.counter",
+            buffer("compact.counter", 16, counter_usage),
+        );
         let uniform_size = std::mem::size_of::<FrameUniform>() as u64;
         r.buffer(
             "frame.uniform",
@@ -102,7 +105,10 @@ impl FrameTargets {
         );
         // Room for the longest step list; each frame writes the steps it runs.
         let steps = jfa::SLOT * jfa_steps(width, height).len() as u64;
-        r.buffer("jfa.steps", buffer("jfa.steps", steps, B::UNIFORM | B::COPY_DST));
+        r.buffer(
+            "jfa.steps",
+            buffer("jfa.steps", steps, B::UNIFORM | B::COPY_DST),
+        );
         r.buffer("materials.planned", planned_materials);
         FrameTargets {
             resources: r,

@@ -46,8 +46,14 @@ pub fn constants() -> Vec<(&'static str, u32)> {
         ("OVERLAY_NONE", Overlay::None.id()),
         ("OVERLAY_SAMPLES", Overlay::Samples.id()),
         ("OVERLAY_PROBABILITY", Overlay::Probability.id()),
-        ("PROBABILITY_LINEAR", probability_form_id(ProbabilityForm::Linear)),
-        ("PROBABILITY_DENSITY", probability_form_id(ProbabilityForm::Density)),
+        (
+            "PROBABILITY_LINEAR",
+            probability_form_id(ProbabilityForm::Linear),
+        ),
+        (
+            "PROBABILITY_DENSITY",
+            probability_form_id(ProbabilityForm::Density),
+        ),
         ("NO_SEED", crate::foveation::reconstruct::NO_SEED),
     ]
 }

@@ -17,13 +17,13 @@ use futures_util::{SinkExt, StreamExt};
 use super::recorder::Recorder;
 use super::ServerState;
 use crate::encode;
-use crate::settings::{Preset, Settings};
 use crate::gaze::prediction::Predictor;
 use crate::protocol::{
     encode_frame, parse_client_message, ClientMessage, ErrorCode, FrameHeader, Gaze, GazeUsed,
     Hello, ProtocolError, ServerMessage, SolveProgress, StageTimes, Welcome, PROTOCOL_VERSION,
 };
 use crate::render::FrameRequest;
+use crate::settings::{Preset, Settings};
 use crate::viewing::Viewing;
 
 /// A frame being made: everything needed to render it and to write its header.

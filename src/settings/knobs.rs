@@ -189,7 +189,8 @@ knobs! {
 
 /// The knob table as Markdown, as `docs/protocol.md` carries it.
 pub fn markdown_table() -> String {
-    let mut s = String::from("| knob | value | range | scope | what it does |\n|---|---|---|---|---|\n");
+    let mut s =
+        String::from("| knob | value | range | scope | what it does |\n|---|---|---|---|---|\n");
     for k in KNOBS {
         let range = k
             .range
@@ -201,7 +202,9 @@ pub fn markdown_table() -> String {
         };
         s.push_str(&format!(
             "| `{}` | {} | {range} | {scope} | {} |\n",
-            k.name, k.kind, k.doc
+            k.name,
+            k.kind,
+            k.doc.trim()
         ));
     }
     s
@@ -225,7 +228,12 @@ mod tests {
         let patch: SettingsPatch = serde_json::from_value(json.clone()).unwrap();
         let back = serde_json::to_value(&patch).unwrap();
         assert_eq!(back, json);
-        let names: Vec<&str> = back.as_object().unwrap().keys().map(String::as_str).collect();
+        let names: Vec<&str> = back
+            .as_object()
+            .unwrap()
+            .keys()
+            .map(String::as_str)
+            .collect();
         let mut listed: Vec<&str> = KNOBS.iter().map(|k| k.name).collect();
         listed.sort();
         assert_eq!(names, listed);

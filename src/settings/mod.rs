@@ -379,7 +379,10 @@ mod tests {
             ..Default::default()
         };
         s.apply(&patch).unwrap();
-        assert_eq!((s.preset, s.customised, s.session.prediction), (Preset::Fast, false, true));
+        assert_eq!(
+            (s.preset, s.customised, s.session.prediction),
+            (Preset::Fast, false, true)
+        );
         let patch = SettingsPatch {
             min_probability: Some(0.3),
             ..Default::default()

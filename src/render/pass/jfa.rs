@@ -2,9 +2,7 @@
 //! pixel holds its (nearly always exactly) nearest shaded sample. Each step's jump size comes
 //! from a uniform slot selected by dynamic offset.
 
-use crate::render::graph::{
-    dynamic_uniform, read, uniform, write, GraphError, PassDecl, Recorder,
-};
+use crate::render::graph::{dynamic_uniform, read, uniform, write, GraphError, PassDecl, Recorder};
 
 /// Uniform slots must start at multiples of the device's offset alignment (256 by default).
 pub const SLOT: u64 = 256;

@@ -144,7 +144,8 @@ impl PhotonPass {
         use wgpu::BufferUsages as B;
         use wgpu::TextureFormat as F;
         let usage = wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::TEXTURE_BINDING;
-        let tex = |label, format, usage| gpu::texture_2d(device, label, (SIDE, SIDE), format, usage);
+        let tex =
+            |label, format, usage| gpu::texture_2d(device, label, (SIDE, SIDE), format, usage);
         let buffer = |label, size: u64, usage| {
             device.create_buffer(&wgpu::BufferDescriptor {
                 label: Some(label),
@@ -154,18 +155,33 @@ impl PhotonPass {
             })
         };
         let mut r = Resources::default();
-        r.texture("photons.position", tex("photons.position", F::Rgba32Float, usage));
-        r.texture("photons.normal", tex("photons.normal", F::Rgba32Float, usage));
-        r.texture("photons.irradiance", tex("photons.irradiance", IRRADIANCE, usage));
+        r.texture(
+            "photons.position",
+            tex("photons.position", F::Rgba32Float, usage),
+        );
+        r.texture(
+            "photons.normal",
+            tex("photons.normal", F::Rgba32Float, usage),
+        );
+        r.texture(
+            "photons.irradiance",
+            tex("photons.irradiance", IRRADIANCE, usage),
+        );
         let depth_usage = wgpu::TextureUsages::RENDER_ATTACHMENT;
-        r.texture("photons.depth", tex("photons.depth", F::Depth32Float, depth_usage));
+        r.texture(
+            "photons.depth",
+            tex("photons.depth", F::Depth32Float, depth_usage),
+        );
         let nodes = buffer("photons.nodes", node_count() * 32, B::STORAGE | B::COPY_SRC);
         r.buffer("photons.nodes", nodes);
         let uniform_size = std::mem::size_of::<PhotonUniform>() as u64;
         let uniform = buffer("photons.uniform", uniform_size, B::UNIFORM | B::COPY_DST);
         r.buffer("photons.uniform", uniform);
         let levels = pyramid::SLOT * u64::from(LEVELS);
-        r.buffer("pyramid.levels", buffer("pyramid.levels", levels, B::UNIFORM | B::COPY_DST));
+        r.buffer(
+            "pyramid.levels",
+            buffer("pyramid.levels", levels, B::UNIFORM | B::COPY_DST),
+        );
         r.buffer("materials.scene", materials.clone());
         let routes = Routes::default();
         let raster_bind = r.bind(device, &pipelines.layout(&PASS), &PASS, &routes)?;
@@ -203,7 +219,11 @@ impl PhotonPass {
             .resources
             .get_buffer("photons.uniform")
             .ok_or(missing("photons.uniform"))?;
-        queue.write_buffer(uniform, 0, bytemuck::bytes_of(&photon_uniform(scene, inputs)));
+        queue.write_buffer(
+            uniform,
+            0,
+            bytemuck::bytes_of(&photon_uniform(scene, inputs)),
+        );
         let view = |name| {
             map.resources
                 .get_texture(name)
