@@ -1,5 +1,8 @@
 //! The foveated path on the GPU, held to its CPU twins and pushed to its extremes.
 
+mod common;
+
+use common::images::{assert_image, IDENTICAL, LAVAPIPE};
 use fovea::foveation::rank_map;
 use fovea::foveation::reconstruct::{jfa_with_steps, reconstruct, unpack, NO_SEED};
 use fovea::optics::acuity::{acuity_probability, mar_deg, ProbabilityForm};
@@ -52,9 +55,14 @@ fn with_every_pixel_sampled_the_foveated_path_equals_full_shading() {
     all.settings.foveation.min_probability = 1.0;
     all.stream = 2;
     let frame = r.render(&all).unwrap();
-    assert_eq!(
-        reference.rgba, frame.rgba,
-        "ξ = 1 must reproduce full shading exactly"
+    // ξ = 1 must reproduce full shading exactly.
+    assert_image(
+        "xi_1_equals_full",
+        &frame.rgba,
+        &reference.rgba,
+        w,
+        h,
+        IDENTICAL,
     );
     let covered = inspect(&r, &all)
         .flags
@@ -111,7 +119,7 @@ fn sampling_map_matches_the_cpu_acuity_model() {
             let gpu = f64::from(img.probability[k]);
             assert!(
                 (gpu - p).abs() < 1e-4,
-                "{form:?} pixel {k}: GPU {gpu}, CPU {p}"
+                "{form:?} pixel {k}: GPU {gpu}, CPU {p} (bound 1e-4, from {LAVAPIPE})"
             );
             // First frame of a stream: tile offset (0, 0).
             let t =
@@ -194,7 +202,14 @@ fn compaction_changes_the_cost_not_the_image() {
     b.stream = 2;
     let fa = r.render(&a).unwrap();
     let fb = r.render(&b).unwrap();
-    assert_eq!(fa.rgba, fb.rgba);
+    assert_image(
+        "compaction_on_vs_off",
+        &fb.rgba,
+        &fa.rgba,
+        120,
+        90,
+        IDENTICAL,
+    );
     assert!(
         fa.sampled > 0.0 && fa.sampled < 0.5,
         "sampled {}",

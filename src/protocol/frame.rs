@@ -9,10 +9,24 @@ pub struct GazeUsed {
     pub y: f64,
 }
 
+/// What a frame answers.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Trigger {
+    /// A gaze sample (`seq`, `t_ms`): the frames gaze-to-display latency is measured on.
+    #[default]
+    Gaze,
+    /// A settings change, showing the last sample again.
+    Settings,
+    /// The session's first frame, before any sample.
+    Start,
+}
+
 /// Milliseconds spent in each stage of one frame, measured on the server's monotonic clock.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Serialize, Deserialize)]
 pub struct StageTimes {
-    /// From the gaze sample's arrival to the render thread picking the frame up.
+    /// From the arrival of what the frame answers (sample, settings change or hello) to the
+    /// render thread picking the frame up.
     pub queue: f64,
     /// Recording and executing the GPU passes (until the GPU reports them done).
     pub render: f64,
@@ -31,6 +45,9 @@ pub struct FrameHeader {
     pub seq: Option<u64>,
     /// That sample's own `t_ms` (client clock), echoed for gaze-to-display latency.
     pub t_ms: Option<f64>,
+    /// What this frame answers; only `gaze` frames measure gaze-to-display latency.
+    #[serde(default)]
+    pub trigger: Trigger,
     pub gaze: GazeUsed,
     /// The sample's own position when prediction moved the gaze used.
     #[serde(default, skip_serializing_if = "Option::is_none")]
@@ -114,6 +131,7 @@ mod tests {
             frame: 42,
             seq: Some(17),
             t_ms: Some(12399.1),
+            trigger: super::Trigger::Gaze,
             gaze: GazeUsed { x: 0.25, y: 0.75 },
             raw_gaze: Some(GazeUsed { x: 0.2, y: 0.75 }),
             width: 64,

@@ -12,7 +12,9 @@ mod parse;
 /// The `settings` message is the knob list of [`crate::settings::knobs`].
 pub use crate::settings::SettingsPatch;
 pub use error::{ErrorCode, ProtocolError};
-pub use frame::{decode_frame, encode_frame, FrameHeader, GazeUsed, SolveProgress, StageTimes};
+pub use frame::{
+    decode_frame, encode_frame, FrameHeader, GazeUsed, SolveProgress, StageTimes, Trigger,
+};
 pub use limits::Limits;
 pub use messages::{
     Ack, Codec, Display, ErrorMessage, Gaze, Hello, SceneInfo, ServerMessage, Welcome,

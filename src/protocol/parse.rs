@@ -160,14 +160,18 @@ fn validate_hello(h: &Hello, limits: &Limits) -> Result<(), ProtocolError> {
 }
 
 fn validate_settings(p: &SettingsPatch) -> Result<(), ProtocolError> {
-    p.validate().map_err(|e| {
+    p.validate().map_err(ProtocolError::from)
+}
+
+impl From<KnobError> for ProtocolError {
+    fn from(e: KnobError) -> Self {
         let code = match e {
             KnobError::NotFinite { .. } => ErrorCode::NotFinite,
             KnobError::OutOfRange { .. } => ErrorCode::OutOfRange,
             KnobError::UnknownPreset(_) => ErrorCode::UnknownPreset,
         };
         ProtocolError::new(code, e.to_string())
-    })
+    }
 }
 
 fn validate_gaze(g: &Gaze, limits: &Limits) -> Result<(), ProtocolError> {

@@ -16,18 +16,17 @@ const QUEUE_DEPTH: usize = 16;
 enum Job {
     Render {
         request: FrameRequest,
-        enqueued: Instant,
         reply: oneshot::Sender<Result<Rendered, RenderError>>,
     },
     /// A stream (session) ended: free its targets and history.
     Release(u64),
 }
 
-/// A rendered frame plus how long it waited for the render thread.
+/// A rendered frame plus when the render thread started on it (its wait ended).
 #[derive(Debug)]
 pub struct Rendered {
     pub frame: RenderedFrame,
-    pub queue_ms: f64,
+    pub started: Instant,
 }
 
 /// Cloneable handle sessions use to get frames rendered.
@@ -41,11 +40,7 @@ pub struct RenderHandle {
 impl RenderHandle {
     pub async fn render(&self, request: FrameRequest) -> Result<Rendered, RenderError> {
         let (reply, rx) = oneshot::channel();
-        let job = Job::Render {
-            request,
-            enqueued: Instant::now(),
-            reply,
-        };
+        let job = Job::Render { request, reply };
         self.tx
             .send(job)
             .await
@@ -94,18 +89,14 @@ impl RenderThread {
 
 fn run(mut renderer: Renderer, mut rx: mpsc::Receiver<Job>) {
     while let Some(job) = rx.blocking_recv() {
-        let (request, enqueued, reply) = match job {
-            Job::Render {
-                request,
-                enqueued,
-                reply,
-            } => (request, enqueued, reply),
+        let (request, reply) = match job {
+            Job::Render { request, reply } => (request, reply),
             Job::Release(stream) => {
                 renderer.release_stream(stream);
                 continue;
             }
         };
-        let queue_ms = enqueued.elapsed().as_secs_f64() * 1e3;
+        let started = Instant::now();
         let span = tracing::debug_span!("render", w = request.width, h = request.height);
         let _enter = span.enter();
         // A panic inside the driver stack must not take every session down with it.
@@ -120,7 +111,7 @@ fn run(mut renderer: Renderer, mut rx: mpsc::Receiver<Job>) {
                 Err(RenderError::Gpu(format!("renderer panicked: {what}")))
             });
         // The session may have gone away meanwhile; then nobody wants the frame.
-        let _ = reply.send(result.map(|frame| Rendered { frame, queue_ms }));
+        let _ = reply.send(result.map(|frame| Rendered { frame, started }));
     }
     tracing::debug!("render thread stopping: no more handles");
 }

@@ -4,9 +4,13 @@
 
 mod app;
 mod assets;
+mod connection;
+mod frame_maker;
 pub mod metrics;
+mod pacing;
 mod recorder;
 mod session;
+mod timing;
 
 use std::sync::atomic::AtomicU64;
 use std::sync::Arc;

@@ -2,6 +2,10 @@
 //! the server task, then join the render thread, so no test process exits while the render
 //! thread is still inside the Vulkan driver (lavapipe crashes at exit if it is).
 
+#![allow(dead_code)] // each test binary uses a part of this
+
+pub mod images;
+
 use std::net::SocketAddr;
 use std::time::Duration;
 

@@ -1,0 +1,104 @@
+//! Making one frame: render on the render thread, encode on the blocking pool, and pack the
+//! binary message with its header. The header's stage times come from the frame's one timing
+//! record ([`FrameTimes`]).
+
+use std::time::{Duration, Instant};
+
+use super::pacing::Ticket;
+use super::timing::FrameTimes;
+use crate::encode;
+use crate::protocol::{
+    encode_frame, Codec, ErrorCode, FrameHeader, GazeUsed, ProtocolError, SolveProgress,
+};
+use crate::render::{FrameRequest, RenderHandle};
+
+/// Everything needed to render a frame and write its header.
+#[derive(Debug, Clone)]
+pub struct FrameJob {
+    pub ticket: Ticket,
+    /// The sample's own position when prediction moved the gaze.
+    pub raw: Option<[f32; 2]>,
+    pub request: FrameRequest,
+    pub codec: Codec,
+    pub quality: u8,
+}
+
+/// A frame ready for the socket.
+#[derive(Debug)]
+pub struct MadeFrame {
+    pub bytes: Vec<u8>,
+    pub times: FrameTimes,
+}
+
+/// A frame that could not be made, with its number so its credit can be returned.
+#[derive(Debug)]
+pub struct FrameFailed {
+    pub frame: u64,
+    pub error: ProtocolError,
+}
+
+pub async fn make(render: RenderHandle, job: FrameJob) -> Result<MadeFrame, FrameFailed> {
+    let frame_no = job.ticket.frame;
+    let failed = |what: &str, e: &dyn std::fmt::Display| FrameFailed {
+        frame: frame_no,
+        error: ProtocolError::new(
+            ErrorCode::RenderFailed,
+            format!("frame {frame_no}: {what}: {e}"),
+        ),
+    };
+    let mut times = FrameTimes::new(job.ticket.arrived, Instant::now());
+    let rendered = render
+        .render(job.request.clone())
+        .await
+        .map_err(|e| failed("render", &e))?;
+    ::metrics::counter!("fovea_frames_rendered_total").increment(1);
+    let frame = rendered.frame;
+    let secs = |ms: f64| Duration::from_secs_f64(ms.max(0.0) / 1e3);
+    times.rendered(
+        rendered.started,
+        secs(frame.render_ms),
+        secs(frame.readback_ms),
+    );
+    let (codec, quality, w, h) = (job.codec, job.quality, frame.width, frame.height);
+    let rgba = frame.rgba;
+    let encoded = tokio::task::spawn_blocking(move || {
+        let _span = tracing::debug_span!("encode", frame = frame_no).entered();
+        let start = Instant::now();
+        encode::encode(&rgba, w, h, codec, quality).map(|bytes| (bytes, start, Instant::now()))
+    })
+    .await
+    .map_err(|e| failed("encoder task", &e))?;
+    let (image, encode_start, encode_end) = encoded.map_err(|e| failed("encode", &e))?;
+    times.encode_start = encode_start;
+    times.encode_end = encode_end;
+    let used = |[x, y]: [f32; 2]| GazeUsed {
+        x: f64::from(x),
+        y: f64::from(y),
+    };
+    let t = &job.ticket;
+    let header = FrameHeader {
+        frame: t.frame,
+        seq: t.gaze.map(|g| g.seq),
+        t_ms: t.gaze.map(|g| g.t_ms),
+        trigger: t.trigger,
+        gaze: used(job.request.gaze),
+        raw_gaze: job.raw.map(used),
+        width: w,
+        height: h,
+        codec,
+        sampled: frame.sampled,
+        samples: t.samples,
+        stages_ms: times.stages(),
+        passes_ms: frame.passes_ms,
+        radiosity: frame.radiosity.map(|p| SolveProgress {
+            shots: p.shots,
+            elements: p.elements,
+            unshot: p.unshot,
+            converged: p.converged,
+        }),
+    };
+    Ok(MadeFrame {
+        bytes: encode_frame(&header, &image),
+        times,
+    })
+}
