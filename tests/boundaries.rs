@@ -132,3 +132,70 @@ fn lib_module_map_lists_every_module() {
         );
     }
 }
+
+/// Lines of each `fn` in `text` (from its signature to the closing brace at its indentation).
+fn function_lengths(text: &str) -> Vec<(String, usize)> {
+    let lines: Vec<&str> = text.lines().collect();
+    let mut out = Vec::new();
+    for (i, line) in lines.iter().enumerate() {
+        let trimmed = line.trim_start();
+        let indent = &line[..line.len() - trimmed.len()];
+        let sig = [
+            "fn ",
+            "pub fn ",
+            "pub(crate) fn ",
+            "pub(super) fn ",
+            "async fn ",
+            "pub async fn ",
+        ];
+        let Some(rest) = sig.iter().find_map(|s| trimmed.strip_prefix(s)) else {
+            continue;
+        };
+        let name: String = rest
+            .chars()
+            .take_while(|c| c.is_alphanumeric() || *c == '_')
+            .collect();
+        let close = format!("{indent}}}");
+        if let Some(end) = lines[i + 1..].iter().position(|l| *l == close) {
+            out.push((name, end + 2));
+        }
+    }
+    out
+}
+
+#[test]
+fn files_stay_under_500_lines_and_render_and_server_functions_under_100() {
+    let src = Path::new(env!("CARGO_MANIFEST_DIR")).join("src");
+    let mut files = Vec::new();
+    rust_files(&src, &mut files);
+    let mut too_long = Vec::new();
+    for file in files {
+        let text = std::fs::read_to_string(&file).unwrap();
+        let lines = text.lines().count();
+        if lines > 500 {
+            too_long.push(format!("{}: {lines} lines", file.display()));
+        }
+        let rel = file
+            .strip_prefix(&src)
+            .unwrap()
+            .to_string_lossy()
+            .into_owned();
+        if rel.starts_with("render") || rel.starts_with("server") {
+            for (name, n) in function_lengths(&text) {
+                if n > 100 {
+                    too_long.push(format!("{}: fn {name} is {n} lines", file.display()));
+                }
+            }
+        }
+    }
+    assert!(too_long.is_empty(), "split these:\n{}", too_long.join("\n"));
+}
+
+#[test]
+fn function_lengths_are_measured_from_signature_to_closing_brace() {
+    let text = "fn a() {\n    1;\n}\n\nimpl X {\n    pub fn b(&self) {\n        2;\n        3;\n    }\n}\n";
+    assert_eq!(
+        function_lengths(text),
+        [("a".to_string(), 3), ("b".to_string(), 4)]
+    );
+}

@@ -22,6 +22,20 @@ pub fn render_reference(
     height: u32,
     to_light: Option<Vec3>,
 ) -> ReferenceImage {
+    let g = rasterise(scene, width, height);
+    shade(scene, &g, width, height, to_light)
+}
+
+/// Per-pixel depth (infinite where nothing covers it), normal and material.
+struct GBuffer {
+    depth: Vec<f32>,
+    normal: Vec<Vec3>,
+    material: Vec<u32>,
+}
+
+/// Rasterises every front-facing triangle the way the GPU's rules do (pixel centres,
+/// perspective-correct normals, nearest depth wins).
+fn rasterise(scene: &Scene, width: u32, height: u32) -> GBuffer {
     let n = (width * height) as usize;
     let mut depth = vec![f32::INFINITY; n];
     let mut normal = vec![Vec3::ZERO; n];
@@ -87,6 +101,22 @@ pub fn render_reference(
             }
         }
     }
+    GBuffer {
+        depth,
+        normal,
+        material,
+    }
+}
+
+/// Lambert shading of the covered pixels; the background elsewhere.
+fn shade(
+    scene: &Scene,
+    g: &GBuffer,
+    width: u32,
+    height: u32,
+    to_light: Option<Vec3>,
+) -> ReferenceImage {
+    let n = (width * height) as usize;
     let light = &scene.file.light;
     let to_light = to_light
         .and_then(|l| l.try_normalize())
@@ -95,12 +125,12 @@ pub fn render_reference(
     let mut rgba = Vec::with_capacity(n * 4);
     let mut covered = Vec::with_capacity(n);
     for k in 0..n {
-        if depth[k].is_finite() {
+        if g.depth[k].is_finite() {
             let c = lambert(
-                normal[k],
+                g.normal[k],
                 to_light,
                 Vec3::from(
-                    scene.materials[material[k] as usize]
+                    scene.materials[g.material[k] as usize]
                         .1
                         .albedo()
                         .map(|a| a as f32),

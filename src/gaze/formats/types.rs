@@ -1,0 +1,111 @@
+//! What the format parsers take and give: the formats, column mapping, options, errors and
+//! the parsed recording.
+
+use crate::gaze::Sample;
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Format {
+    /// `t_s, xpos, ypos, ps`: seconds, pixels on a stated screen, pupil AREA (arbitrary units).
+    Eyelink,
+    /// `gaze_timestamp, norm_pos_x, norm_pos_y, confidence`: seconds, normalised with the origin
+    /// at the BOTTOM left, confidence in [0, 1].
+    PupilCore,
+    /// `timestamp [ns], gaze x [px], gaze y [px]`: scene-camera pixels (1600×1200 unless stated).
+    PupilNeon,
+    /// `device_time_stamp, gaze_point_x, gaze_point_y, pupil_diameter`: µs, normalised
+    /// (top-left), mm.
+    Tobii,
+    /// Columns named by `Columns` (defaults `t_ms, x, y, pupil_mm`), normalised coordinates.
+    Generic,
+}
+
+/// Column mapping for the generic format.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Columns {
+    pub time: String,
+    pub x: String,
+    pub y: String,
+    pub pupil: Option<String>,
+    /// Time unit of the time column: s, ms, us or ns.
+    pub time_unit: String,
+    /// Coordinates in pixels (needs a screen size) instead of normalised.
+    pub pixels: bool,
+}
+
+impl Default for Columns {
+    fn default() -> Self {
+        Columns {
+            time: "t_ms".into(),
+            x: "x".into(),
+            y: "y".into(),
+            pupil: Some("pupil_mm".into()),
+            time_unit: "ms".into(),
+            pixels: false,
+        }
+    }
+}
+
+/// Everything a parse needs besides the text.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ParseOptions {
+    pub format: Option<Format>,
+    /// Screen size in pixels, for formats in pixels.
+    pub screen: Option<(u32, u32)>,
+    pub columns: Columns,
+    /// EyeLink pupil areas are mapped to diameters so that the recording's median is this many mm.
+    pub pupil_median_mm: f64,
+    /// Pupil Labs Core samples below this confidence count as track loss.
+    pub min_confidence: f64,
+}
+
+impl Default for ParseOptions {
+    fn default() -> Self {
+        ParseOptions {
+            format: None,
+            screen: None,
+            columns: Columns::default(),
+            pupil_median_mm: 4.0,
+            min_confidence: 0.6,
+        }
+    }
+}
+
+#[derive(Debug, thiserror::Error, PartialEq)]
+pub enum FormatError {
+    #[error("the file is empty")]
+    Empty,
+    #[error("cannot tell the format from the header {header:?}; say --format (eyelink, pupil_core, pupil_neon, tobii, generic)")]
+    Unknown { header: String },
+    #[error("{format:?} needs column {column:?}, which the header {header:?} lacks")]
+    MissingColumn {
+        format: Format,
+        column: String,
+        header: String,
+    },
+    #[error("line {line}: {column} = {value:?} is not a number")]
+    NotNumeric {
+        line: usize,
+        column: String,
+        value: String,
+    },
+    #[error("line {line}: time {t} goes back from {previous} (samples must be in time order)")]
+    Unsorted { line: usize, t: f64, previous: f64 },
+    #[error("line {line}: time {t} repeats the previous sample's time")]
+    Duplicate { line: usize, t: f64 },
+    #[error("{0:?} coordinates are in pixels: give the screen size (--screen WxH)")]
+    NeedsScreen(Format),
+    #[error("unknown time unit {0:?} (s, ms, us, ns)")]
+    TimeUnit(String),
+    #[error("the file has a header but no samples")]
+    NoSamples,
+}
+
+/// The parsed recording and what was decided on the way, to print for the user.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Recording {
+    pub format: Format,
+    pub samples: Vec<Sample>,
+    /// How pupil values were turned into millimetres, if they were.
+    pub pupil_rule: Option<String>,
+}
