@@ -17,9 +17,12 @@ case "${1:-}" in
   render)
     out="${2:?usage: compare_frames.sh render DIR}"
     mkdir -p "$out"
+    # Binaries before the command-line cleanup took --width/--height instead of --size.
+    size=(--size 160x120)
+    "$bin" render --help | grep -q -- '--size' || size=(--width 160 --height 120)
     for s in "${scenes[@]}"; do
       for p in "${presets[@]}"; do
-        "$bin" render --scene "$s" --preset "$p" --width 160 --height 120 --gaze 0.4,0.45 \
+        "$bin" render --scene "$s" --preset "$p" "${size[@]}" --gaze 0.4,0.45 \
           --frames 3 --out "$out/$s-$p.png" 2>/dev/null
         echo "rendered $s $p"
       done

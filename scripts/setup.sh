@@ -1,8 +1,12 @@
 #!/usr/bin/env bash
-# Installs what Fovea needs on a Debian/Ubuntu machine, only where it is missing.
-#   scripts/setup.sh          what `fovea serve` needs: Rust, a C linker, a Vulkan driver
-#   scripts/setup.sh --test   also what the tests need: Chromium, Node.js and npm
+# Installs what Fovea needs on Debian 12, Debian 13 or Ubuntu 24.04, only where it is missing.
+#   scripts/setup.sh          what `fovea serve` needs: a C toolchain, the Vulkan loader and a
+#                             Vulkan driver, and a Rust toolchain at least as new as Cargo.toml's
+#                             rust-version (rustup, into ~/.cargo, when the system's is older)
+#   scripts/setup.sh --test   also what the tests need: a Chromium for the browser tests
+# Prints `export PATH=…` advice when it installed Rust; the other scripts source ~/.cargo/env.
 set -euo pipefail
+cd "$(dirname "$0")/.."
 
 want_test=0
 [[ "${1:-}" == "--test" ]] && want_test=1
@@ -14,18 +18,25 @@ if [[ $(id -u) -ne 0 ]]; then
   fi
 fi
 
+# shellcheck disable=SC1091
+. /etc/os-release 2>/dev/null || ID=unknown
+
 pkgs=()
 command -v cc >/dev/null || pkgs+=(build-essential)
 command -v curl >/dev/null || pkgs+=(curl ca-certificates)
+command -v pkg-config >/dev/null || pkgs+=(pkg-config)
 # The Vulkan loader, and Mesa's software driver (lavapipe) when no Vulkan driver is installed:
 # with it every machine has an adapter, GPU or not.
 ldconfig -p 2>/dev/null | grep -q 'libvulkan.so.1' || pkgs+=(libvulkan1)
 compgen -G '/usr/share/vulkan/icd.d/*.json' >/dev/null || compgen -G '/etc/vulkan/icd.d/*.json' >/dev/null \
   || pkgs+=(mesa-vulkan-drivers)
+browser=""
 if [[ $want_test -eq 1 ]]; then
-  command -v chromium >/dev/null || pkgs+=(chromium)
-  command -v node >/dev/null || pkgs+=(nodejs)
-  command -v npm >/dev/null || pkgs+=(npm)
+  for b in chromium chromium-browser google-chrome google-chrome-stable; do
+    if command -v "$b" >/dev/null && "$b" --version >/dev/null 2>&1; then browser=$(command -v "$b"); break; fi
+  done
+  # Debian packages Chromium as a .deb; Ubuntu 24.04 only as a snap (see below).
+  [[ -z "$browser" && "$ID" == "debian" ]] && pkgs+=(chromium)
 fi
 
 if [[ ${#pkgs[@]} -gt 0 ]]; then
@@ -34,11 +45,32 @@ if [[ ${#pkgs[@]} -gt 0 ]]; then
   DEBIAN_FRONTEND=noninteractive $sudo apt-get install -y -qq --no-install-recommends "${pkgs[@]}" >/dev/null
 fi
 
-if ! command -v cargo >/dev/null; then
-  if [[ -x "$HOME/.cargo/bin/cargo" ]]; then
-    echo "setup: Rust is in ~/.cargo/bin; add it to PATH (source ~/.cargo/env)" >&2
+if [[ $want_test -eq 1 && -z "$browser" && "$ID" != "debian" ]]; then
+  # Ubuntu 24.04 has no Chromium .deb and CI has no snapd: Playwright's build of Chromium,
+  # fetched by its Python package into ~/.cache/ms-playwright. The tests find it via CHROMIUM.
+  echo "setup: no Chromium .deb on $ID; fetching Playwright's Chromium (headless shell)"
+  DEBIAN_FRONTEND=noninteractive $sudo apt-get install -y -qq --no-install-recommends python3-venv >/dev/null
+  venv="$HOME/.cache/fovea/playwright"
+  [[ -x "$venv/bin/playwright" ]] || { python3 -m venv "$venv" && "$venv/bin/pip" install -q playwright; }
+  $sudo "$venv/bin/playwright" install-deps chromium-headless-shell >/dev/null
+  "$venv/bin/playwright" install chromium-headless-shell >/dev/null
+  shell=$(compgen -G "$HOME/.cache/ms-playwright/chromium_headless_shell-*/chrome-*/chrome-headless-shell" | head -n1)
+  echo "setup: browser tests use $shell (export CHROMIUM=$shell)"
+fi
+
+# Rust: the toolchain must be at least Cargo.toml's rust-version (the newest minimum in the
+# locked dependency tree); distributions ship older ones (Debian 12: 1.63, Debian 13: 1.85,
+# Ubuntu 24.04: 1.75), so rustup installs a current one beside them.
+need=$(sed -n 's/^rust-version = "\(.*\)"/\1/p' Cargo.toml)
+[[ -f "$HOME/.cargo/env" ]] && . "$HOME/.cargo/env"
+have=$(cargo --version 2>/dev/null | sed -n 's/^cargo \([0-9]*\.[0-9]*\).*/\1/p')
+older() { [[ "$(printf '%s\n%s\n' "$1" "$2" | sort -V | head -n1)" != "$2" ]]; }
+if [[ -z "$have" ]] || older "$have" "$need"; then
+  echo "setup: Rust ${have:-missing}, Fovea needs $need or newer: installing the stable toolchain with rustup"
+  if command -v rustup >/dev/null; then
+    rustup toolchain install stable --profile minimal && rustup default stable
   else
-    echo "setup: installing Rust with rustup"
     curl --proto '=https' --tlsv1.2 -sSf https://sh.rustup.rs | sh -s -- -y --profile minimal
   fi
+  echo "setup: run 'source ~/.cargo/env' (or open a new shell) to use it"
 fi

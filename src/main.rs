@@ -16,7 +16,7 @@ use fovea::render::{FrameRequest, RenderThread, Renderer};
 use cli::bench::{bench, BenchArgs};
 use cli::gaze::{gaze, replay, GazeArgs, ReplayArgs};
 use cli::load::{load, LoadArgs};
-use cli::parse::{parse_gaze, parse_vec3};
+use cli::parse::{parse_gaze, parse_size, parse_vec3};
 use cli::radiosity::{radiosity, RadiosityArgs};
 
 #[derive(Parser)]
@@ -58,17 +58,16 @@ enum Command {
     /// --frames N the same gaze is rendered N times as one stream (so reprojection has history)
     /// and the last frame is written.
     Render {
-        /// Scene to render (built-in: bunny).
-        #[arg(long, default_value = fovea::scene::DEFAULT_SCENE)]
+        /// Built-in scene to render.
+        #[arg(long, default_value = fovea::scene::DEFAULT_SCENE, value_parser = cli::parse::scene_names())]
         scene: String,
         /// A scene file of your own (docs/scenes.md) instead of a built-in scene; its meshes
         /// must be built in.
         #[arg(long, conflicts_with = "scene")]
         scene_file: Option<PathBuf>,
-        #[arg(long, default_value_t = 640)]
-        width: u32,
-        #[arg(long, default_value_t = 480)]
-        height: u32,
+        /// Frame size WxH.
+        #[arg(long, value_parser = parse_size, default_value = "640x480")]
+        size: (u32, u32),
         /// Gaze as X,Y in [0,1], top-left origin; foveation centres here and the marker is drawn here.
         #[arg(long, value_parser = parse_gaze, default_value = "0.5,0.5")]
         gaze: [f32; 2],
@@ -87,8 +86,8 @@ enum Command {
         /// JPEG quality 1–100.
         #[arg(long, default_value_t = 90, value_parser = clap::value_parser!(u8).range(1..=100))]
         quality: u8,
-        /// Quality preset.
-        #[arg(long, value_enum, default_value_t = fovea::settings::Preset::Full)]
+        /// Quality preset (the same default as a `serve` session).
+        #[arg(long, value_enum, default_value_t = fovea::settings::Preset::DEFAULT)]
         preset: fovea::settings::Preset,
         /// Frames to render before writing the last one.
         #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..=10000))]
@@ -135,6 +134,12 @@ enum Command {
 }
 
 fn main() -> Result<()> {
+    // Mesa's Vulkan device-select layer looks for a Wayland display to rank GPUs and, on a
+    // headless machine, prints "XDG_RUNTIME_DIR is invalid" for every instance; wgpu picks the
+    // adapter itself. Set before any thread starts, so nothing reads the environment meanwhile.
+    if std::env::var_os("NODEVICE_SELECT").is_none() {
+        std::env::set_var("NODEVICE_SELECT", "1");
+    }
     tracing_subscriber::fmt()
         .with_env_filter(
             tracing_subscriber::EnvFilter::try_from_default_env()
@@ -166,8 +171,7 @@ fn main() -> Result<()> {
         Command::Render {
             scene,
             scene_file,
-            width,
-            height,
+            size: (width, height),
             gaze,
             no_marker,
             light,

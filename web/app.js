@@ -1,41 +1,35 @@
-// Fovea thin client: one WebSocket, the mouse as gaze, frames drawn newest-first.
-// Protocol v1: JSON text both ways; frames are binary [u32 LE header length][JSON header][image].
+// Fovea thin client: one WebSocket, the mouse (or a synthetic eye) as gaze, frames drawn
+// newest-first. Protocol v1: JSON text both ways; frames are binary
+// [u32 LE header length][JSON header][image]. Every (re)connect starts a fresh session state;
+// a lost connection is retried with backoff, and a full server is retried too.
 
-import { Stats, overlayText } from './overlay.js';
+import { Stats, overlayText, sparkline } from './overlay.js';
 import { SyntheticEye } from './synthetic-eye.js';
+import { bindControls, controls, drawFovea, showBanner, hideBanner, setStatus } from './ui.js';
 
 const canvas = document.getElementById('view');
 const ctx = canvas.getContext('2d');
-const overlay = document.getElementById('overlay');
-const statusEl = document.getElementById('status');
-const sceneSel = document.getElementById('scene');
-const sizeSel = document.getElementById('size');
-const codecSel = document.getElementById('codec');
-const presetSel = document.getElementById('preset');
-const overlaySel = document.getElementById('overlay-mode');
-const dofBox = document.getElementById('dof');
-const pupilRange = document.getElementById('pupil');
-const autoBox = document.getElementById('auto-gaze');
-const predictBox = document.getElementById('predict');
 
-// Exposed for people poking in the console and for the browser test.
+const BACKOFF_MS = [1000, 2000, 4000, 8000, 10000];
+const SLOW_FRAME_MS = 500;
+
+// Exposed for people poking in the console and for the browser tests.
 const state = {
   ws: null,
   welcome: null,
   seq: 0,
-  lastHeader: null,   // header of the frame on screen
-  framesShown: 0,
+  lastHeader: null,   // header of the frame on screen (this session)
+  framesShown: 0,     // this session
+  totalFrames: 0,     // every session of this page
+  connects: 0,
   pending: null,      // decoded frame waiting for the next animation frame
   drawScheduled: false,
   stats: new Stats(),
   errors: [],
+  waitingSince: null, // when we asked for a frame that has not come yet
+  retry: null,        // { at, attempt, reason } while a reconnect is scheduled
 };
 window.fovea = state;
-
-function setStatus(text, kind) {
-  statusEl.textContent = text;
-  statusEl.className = `status ${kind}`;
-}
 
 function send(msg) {
   if (state.ws && state.ws.readyState === WebSocket.OPEN) state.ws.send(JSON.stringify(msg));
@@ -45,44 +39,94 @@ function ack(frame, dropped) {
   send({ type: 'ack', frame, t_ms: performance.now(), dropped });
 }
 
-function connect() {
-  if (state.ws) state.ws.close(1000, 'reconnecting');
-  const [width, height] = sizeSel.value.split('x').map(Number);
+// Everything that belongs to one session starts afresh: frame numbers restart at 1.
+function resetSession() {
+  if (state.pending) state.pending.bitmap.close();
+  Object.assign(state, {
+    welcome: null, lastHeader: null, pending: null, framesShown: 0, stats: new Stats(),
+    waitingSince: performance.now(),
+  });
+}
+
+let retryTimer = null;
+let attempt = 0;
+
+export function connect() {
+  clearTimeout(retryTimer);
+  state.retry = null;
+  if (state.ws) {
+    const old = state.ws;
+    state.ws = null;
+    old.close(1000, 'reconnecting');
+  }
+  resetSession();
+  const [width, height] = controls.size.value.split('x').map(Number);
   canvas.width = width;
   canvas.height = height;
   const proto = location.protocol === 'https:' ? 'wss' : 'ws';
   const ws = new WebSocket(`${proto}://${location.host}/ws`);
   ws.binaryType = 'arraybuffer';
   state.ws = ws;
+  state.connects += 1;
   setStatus('connecting…', 'connecting');
   ws.onopen = () => {
     send({
-      type: 'hello', v: 1, scene: sceneSel.value, width, height, preset: presetSel.value,
-      codec: codecSel.value, quality: 85, max_in_flight: 2,
+      type: 'hello', v: 1, scene: controls.scene.value, width, height, preset: controls.preset.value,
+      codec: controls.codec.value, quality: 85, max_in_flight: 2,
     });
     sendSettings();
   };
-  ws.onmessage = (ev) => (typeof ev.data === 'string' ? onText(ev.data) : onFrame(ev.data));
-  ws.onclose = (ev) => {
+  ws.onmessage = (ev) => {
     if (state.ws !== ws) return;
-    setStatus(`closed${ev.reason ? `: ${ev.reason}` : ''}`, 'error');
+    if (typeof ev.data === 'string') onText(ev.data); else onFrame(ev.data);
   };
-  ws.onerror = () => setStatus('connection error', 'error');
+  ws.onclose = (ev) => {
+    if (state.ws !== ws) return; // replaced on purpose
+    state.ws = null;
+    resetSession(); // the session is over: nothing of it may linger into the next
+    state.waitingSince = null;
+    scheduleRetry(ev.code === 1013 ? 'server full' : `connection closed${ev.reason ? ` (${ev.reason})` : ''}`, ev.code === 1013);
+  };
+}
+
+function scheduleRetry(reason, full) {
+  const delay = BACKOFF_MS[Math.min(attempt, BACKOFF_MS.length - 1)];
+  attempt += 1;
+  state.retry = { at: performance.now() + delay, attempt, reason };
+  retryTimer = setTimeout(connect, delay);
+  showRetry(full);
+}
+
+function showRetry(full) {
+  if (!state.retry) return;
+  const secs = Math.max(0, Math.ceil((state.retry.at - performance.now()) / 1000));
+  const text = full ? `server full, retrying in ${secs} s` : `${state.retry.reason}: reconnecting in ${secs} s`;
+  setStatus(full ? 'server full' : 'reconnecting', 'waiting');
+  showBanner(text, 'info');
+  if (secs > 0) setTimeout(() => showRetry(full), 1000);
 }
 
 function onText(text) {
   const msg = JSON.parse(text);
   if (msg.type === 'welcome') {
+    attempt = 0;
+    hideBanner();
     state.welcome = msg;
     setStatus(`live · session ${msg.session}`, 'live');
     document.getElementById('adapter').textContent = `GPU: ${msg.adapter}`;
-    const current = sceneSel.value;
-    sceneSel.replaceChildren(...msg.scenes.map((name) => new Option(name, name, false, name === current)));
-    const preset = presetSel.value;
-    presetSel.replaceChildren(...msg.presets.map((name) => new Option(name, name, false, name === preset)));
+    const fill = (sel, names) => {
+      const current = sel.value;
+      sel.replaceChildren(...names.map((name) => new Option(name, name, false, name === current)));
+    };
+    fill(controls.scene, msg.scenes);
+    fill(controls.preset, msg.presets);
+    const link = document.getElementById('recording');
+    link.hidden = !msg.recording;
+    if (msg.recording) link.href = msg.recording;
   } else if (msg.type === 'error') {
     state.errors.push(msg);
     console.warn(`server error ${msg.code}: ${msg.message}`);
+    showBanner(`server: ${msg.message}`, 'error', 8000);
   }
 }
 
@@ -90,6 +134,7 @@ async function onFrame(buffer) {
   const view = new DataView(buffer);
   const headerLen = view.getUint32(0, true);
   const header = JSON.parse(new TextDecoder().decode(new Uint8Array(buffer, 4, headerLen)));
+  state.stats.frameReceived(performance.now(), buffer.byteLength);
   const type = header.codec === 'png' ? 'image/png' : 'image/jpeg';
   let bitmap;
   try {
@@ -128,45 +173,53 @@ function draw() {
   ctx.drawImage(frame.bitmap, 0, 0, canvas.width, canvas.height);
   frame.bitmap.close();
   const now = performance.now();
-  // Same clock on both ends: t_ms came from this page's performance.now().
-  const latency = frame.header.t_ms == null ? NaN : now - frame.header.t_ms;
-  state.stats.frameShown(now, latency);
+  // Same clock on both ends: t_ms came from this page's performance.now(). Only a frame that
+  // answers a new sample measures gaze-to-display; one made for a settings change shows an
+  // older sample again.
+  const answersGaze = (frame.header.trigger ?? 'gaze') === 'gaze' && frame.header.t_ms != null;
+  state.stats.frameShown(now, answersGaze ? now - frame.header.t_ms : NaN);
   state.lastHeader = frame.header;
   state.framesShown += 1;
+  state.totalFrames += 1;
+  state.waitingSince = null;
   ack(frame.header.frame, false);
-  overlay.textContent = overlayText(state.stats, frame.header, now);
+  drawFovea(frame.header);
+  document.getElementById('overlay').textContent = overlayText(state.stats, frame.header, now);
 }
 
-// Knobs that change live, without reconnecting.
-function sendSettings() {
-  send({ type: 'settings', preset: presetSel.value, overlay: overlaySel.value, dof: dofBox.checked, prediction: predictBox.checked });
+// Knobs that change live, without reconnecting. A knob left empty keeps the preset's value.
+export function sendSettings(presetChanged = false) {
+  const msg = { type: 'settings', overlay: controls.overlay.value, dof: controls.dof.checked, prediction: controls.predict.checked };
+  if (presetChanged || !state.welcome) msg.preset = controls.preset.value;
+  for (const name of ['mar_slope', 'mar_w0_deg', 'min_probability']) {
+    const v = controls[name].value;
+    if (v !== '' && !presetChanged) msg[name] = Number(v);
+  }
+  if (controls.reconstruction.dataset.touched && !presetChanged) msg.reconstruction = controls.reconstruction.value;
+  send(msg);
+  expectFrame();
+}
+
+function expectFrame() {
+  if (state.waitingSince == null) state.waitingSince = performance.now();
 }
 
 let lastGaze = { x: 0.5, y: 0.5 };
-function sendGaze(x, y) {
+export function sendGaze(x, y, pupil) {
   lastGaze = { x, y };
-  send({ type: 'gaze', seq: ++state.seq, t_ms: performance.now(), x, y, pupil_mm: Number(pupilRange.value) });
+  send({ type: 'gaze', seq: ++state.seq, t_ms: performance.now(), x, y, pupil_mm: pupil ?? Number(controls.pupil.value) });
 }
 
-canvas.addEventListener('mousemove', (ev) => {
-  if (autoBox.checked) return;
-  const r = canvas.getBoundingClientRect();
-  const clamp = (v) => Math.min(1, Math.max(0, v));
-  sendGaze(clamp((ev.clientX - r.left) / r.width), clamp((ev.clientY - r.top) / r.height));
-});
-
-pupilRange.addEventListener('input', () => {
-  document.getElementById('pupil-mm').textContent = Number(pupilRange.value).toFixed(1);
+export function resendGaze() {
   sendGaze(lastGaze.x, lastGaze.y);
-});
-for (const el of [presetSel, overlaySel, dofBox, predictBox]) el.addEventListener('change', sendSettings);
+}
 
 // Auto gaze: the synthetic eye at 120 Hz. Blinks send nothing (the server keeps the last gaze).
 let autoTimer = null;
-autoBox.addEventListener('change', () => {
+export function setAutoGaze(on) {
   clearInterval(autoTimer);
   autoTimer = null;
-  if (!autoBox.checked) return;
+  if (!on) return;
   const eye = new SyntheticEye(1, { widthCm: 53, distanceCm: 60, aspect: canvas.height / canvas.width });
   const t0 = performance.now();
   autoTimer = setInterval(() => {
@@ -174,12 +227,25 @@ autoBox.addEventListener('change', () => {
     if (!deg) return;
     const [x, y] = eye.toFrame(deg);
     const clamp = (v) => Math.min(1, Math.max(0, v));
-    lastGaze = { x: clamp(x), y: clamp(y) };
-    send({ type: 'gaze', seq: ++state.seq, t_ms: performance.now(), x: lastGaze.x, y: lastGaze.y, pupil_mm: pupil });
+    sendGaze(clamp(x), clamp(y), pupil);
   }, 8);
-});
-for (const sel of [sceneSel, sizeSel, codecSel]) sel.addEventListener('change', connect);
+}
+
+// Twice a second: stats panel, sparklines, and the progress indicator for slow frames.
 setInterval(() => {
-  overlay.textContent = overlayText(state.stats, state.lastHeader, performance.now());
-}, 500);
+  const now = performance.now();
+  state.stats.sample(now, state.lastHeader);
+  document.getElementById('overlay').textContent = overlayText(state.stats, state.lastHeader, now);
+  const h = state.stats.history;
+  sparkline(document.getElementById('spark-latency'), h.latency);
+  sparkline(document.getElementById('spark-fps'), h.fps);
+  sparkline(document.getElementById('spark-bytes'), h.bytes);
+  sparkline(document.getElementById('spark-stages'), h.stages);
+  const progress = document.getElementById('progress');
+  const waited = state.waitingSince == null || !state.ws ? 0 : now - state.waitingSince;
+  progress.hidden = waited < SLOW_FRAME_MS;
+  if (!progress.hidden) document.getElementById('progress-text').textContent = `rendering… ${(waited / 1000).toFixed(1)} s`;
+}, 250);
+
+bindControls({ connect, sendSettings, sendGaze, resendGaze, setAutoGaze, expectFrame });
 connect();

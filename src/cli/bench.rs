@@ -9,16 +9,13 @@ use fovea::render::Renderer;
 
 #[derive(clap::Args)]
 pub struct BenchArgs {
-    /// Scenes, comma-separated.
+    /// Scenes, comma-separated (built-in: bunny-marble, bunny-skin, materials, opaque, bunny,
+    /// cornell).
     #[arg(long, default_value = fovea::scene::DEFAULT_SCENE)]
     pub scene: String,
-    #[arg(long, default_value_t = 640)]
-    pub width: u32,
-    #[arg(long, default_value_t = 480)]
-    pub height: u32,
-    /// More frame sizes as WxH, comma-separated (in addition to --width/--height).
-    #[arg(long)]
-    pub sizes: Option<String>,
+    /// Frame sizes WxH, comma-separated.
+    #[arg(long, default_value = "640x480")]
+    pub size: String,
     /// Gaze points X,Y separated by ';' (default: centre and near a corner).
     #[arg(long, default_value = "0.5,0.5;0.1,0.1")]
     pub gaze: String,
@@ -37,8 +34,10 @@ pub struct BenchArgs {
     /// Pupil diameter, mm.
     #[arg(long, default_value_t = fovea::render::DEFAULT_PUPIL_MM)]
     pub pupil_mm: f32,
+    /// Physical width of the displayed frame, cm (sets degrees per pixel for the pooled errors).
     #[arg(long, default_value_t = 53.0)]
     pub display_width_cm: f64,
+    /// Viewing distance, cm.
     #[arg(long, default_value_t = 60.0)]
     pub distance_cm: f64,
     /// Output directory for bench.json, bench.md and bench.svg.
@@ -55,12 +54,11 @@ pub fn bench(a: BenchArgs) -> Result<()> {
     use std::sync::atomic::{AtomicBool, Ordering};
     use std::sync::Arc;
     let configs = fovea::bench::sweep(&a.sweep).map_err(anyhow::Error::msg)?;
-    let mut sizes = vec![parse_size(&format!("{}x{}", a.width, a.height))?];
-    if let Some(more) = &a.sizes {
-        for s in more.split(',') {
-            sizes.push(parse_size(s)?);
-        }
-    }
+    let sizes = a
+        .size
+        .split(',')
+        .map(parse_size)
+        .collect::<Result<Vec<_>>>()?;
     let gazes = a
         .gaze
         .split(';')
@@ -79,7 +77,7 @@ pub fn bench(a: BenchArgs) -> Result<()> {
     if let Some(t) = &against {
         if scenes.len() != 1 || sizes != [(t.width, t.height)] {
             anyhow::bail!(
-                "--against {}: the image is {}x{}; run one scene at that size (--width {} --height {})",
+                "--against {}: the image is {}x{}; run one scene at that size (--size {}x{})",
                 t.path.display(),
                 t.width,
                 t.height,

@@ -4,7 +4,7 @@ use std::path::PathBuf;
 
 use anyhow::{Context, Result};
 
-use super::parse::{parse_enum, parse_size, url_is_allowed};
+use super::parse::{parse_size, url_is_allowed};
 
 #[derive(clap::Args)]
 pub struct RecordingArgs {
@@ -13,23 +13,28 @@ pub struct RecordingArgs {
     /// Screen size WxH in pixels, for formats in pixels (EyeLink, Neon, generic --pixels).
     #[arg(long)]
     pub screen: Option<String>,
-    /// eyelink, pupil_core, pupil_neon, tobii or generic (default: from the header).
-    #[arg(long, value_parser = parse_enum::<fovea::gaze::formats::Format>)]
+    /// Recording format (default: detected from the header).
+    #[arg(long, value_enum)]
     pub format: Option<fovea::gaze::formats::Format>,
     /// EyeLink pupil areas are scaled so the recording's median pupil is this diameter, mm.
     #[arg(long, default_value_t = 4.0)]
     pub pupil_median_mm: f64,
-    /// Generic CSV: column names and time unit (s, ms, us, ns); --pixels for pixel coordinates.
+    /// Generic CSV: the time column.
     #[arg(long, default_value = "t_ms")]
     pub time_col: String,
+    /// Generic CSV: the horizontal gaze column (0–1 of the screen, or pixels with --pixels).
     #[arg(long, default_value = "x")]
     pub x_col: String,
+    /// Generic CSV: the vertical gaze column (0–1 from the top, or pixels with --pixels).
     #[arg(long, default_value = "y")]
     pub y_col: String,
+    /// Generic CSV: the pupil diameter column, mm (optional in the file).
     #[arg(long, default_value = "pupil_mm")]
     pub pupil_col: String,
+    /// Generic CSV: the time column's unit: s, ms, us or ns.
     #[arg(long, default_value = "ms")]
     pub time_unit: String,
+    /// Generic CSV: gaze columns are pixels on --screen rather than fractions.
     #[arg(long)]
     pub pixels: bool,
 }
@@ -87,22 +92,23 @@ pub struct ReplayArgs {
     #[arg(long, default_value_t = 1.0)]
     pub speed: f64,
     /// Start this many seconds into the recording.
-    #[arg(long, default_value_t = 0.0)]
-    pub start_s: f64,
+    #[arg(long, default_value_t = 0.0, alias = "start-s")]
+    pub start: f64,
     /// Play only this many seconds of it.
-    #[arg(long)]
-    pub duration_s: Option<f64>,
+    #[arg(long, alias = "duration-s")]
+    pub duration: Option<f64>,
     /// Play the selection this many times.
     #[arg(long = "loop", default_value_t = 1)]
     pub loops: u32,
-    #[arg(long, default_value = fovea::scene::DEFAULT_SCENE)]
+    /// Scene the session asks for.
+    #[arg(long, default_value = fovea::scene::DEFAULT_SCENE, value_parser = super::parse::scene_names())]
     pub scene: String,
-    #[arg(long, default_value = "balanced")]
-    pub preset: String,
-    #[arg(long, default_value_t = 640)]
-    pub width: u32,
-    #[arg(long, default_value_t = 480)]
-    pub height: u32,
+    /// Quality preset the session asks for.
+    #[arg(long, value_enum, default_value_t = fovea::settings::Preset::DEFAULT)]
+    pub preset: fovea::settings::Preset,
+    /// Frame size WxH the session asks for.
+    #[arg(long, value_parser = parse_size, default_value = "640x480")]
+    pub size: (u32, u32),
     /// Save every received frame as DIR/frames/NNNNNN.jpg.
     #[arg(long)]
     pub save_frames: bool,
@@ -115,9 +121,10 @@ pub struct GazeArgs {
     /// Prediction horizons, ms.
     #[arg(long, default_value = "10,20,30,50")]
     pub horizons: String,
-    /// Physical width of the screen the recording was made on, cm, and the viewing distance.
+    /// Physical width of the screen the recording was made on, cm.
     #[arg(long, default_value_t = 53.0)]
     pub display_width_cm: f64,
+    /// Viewing distance the recording was made at, cm.
     #[arg(long, default_value_t = 60.0)]
     pub distance_cm: f64,
 }
@@ -129,14 +136,14 @@ pub fn replay(a: ReplayArgs) -> Result<()> {
         url,
         hello: fovea::protocol::Hello {
             scene: a.scene.clone(),
-            preset: a.preset.clone(),
-            width: a.width,
-            height: a.height,
+            preset: a.preset.to_string(),
+            width: a.size.0,
+            height: a.size.1,
             ..Default::default()
         },
         speed: a.speed,
-        start_ms: a.start_s * 1e3,
-        duration_ms: a.duration_s.map(|d| d * 1e3),
+        start_ms: a.start * 1e3,
+        duration_ms: a.duration.map(|d| d * 1e3),
         loops: a.loops,
         keep_images: a.save_frames,
     };

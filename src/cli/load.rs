@@ -9,6 +9,7 @@ use super::parse::url_is_allowed;
 
 #[derive(clap::Args)]
 pub struct LoadArgs {
+    /// The server's WebSocket URL (loopback unless --allow-host names the host).
     #[arg(long, default_value = "ws://127.0.0.1:8080/ws")]
     pub url: String,
     /// Concurrent sessions.
@@ -26,14 +27,15 @@ pub struct LoadArgs {
     /// Gaze samples per second per session.
     #[arg(long, default_value_t = 120.0)]
     pub rate_hz: f64,
-    #[arg(long, default_value = fovea::scene::DEFAULT_SCENE)]
+    /// Scene every session asks for.
+    #[arg(long, default_value = fovea::scene::DEFAULT_SCENE, value_parser = super::parse::scene_names())]
     pub scene: String,
-    #[arg(long, default_value = "balanced")]
-    pub preset: String,
-    #[arg(long, default_value_t = 640)]
-    pub width: u32,
-    #[arg(long, default_value_t = 480)]
-    pub height: u32,
+    /// Quality preset every session asks for.
+    #[arg(long, value_enum, default_value_t = fovea::settings::Preset::DEFAULT)]
+    pub preset: fovea::settings::Preset,
+    /// Frame size WxH every session asks for.
+    #[arg(long, value_parser = super::parse::parse_size, default_value = "640x480")]
+    pub size: (u32, u32),
     /// Sweep budget: p95 gaze-to-frame latency, ms.
     #[arg(long, default_value_t = 500.0)]
     pub budget_ms: f64,
@@ -53,6 +55,7 @@ pub struct LoadArgs {
     /// A non-loopback host this load may target (repeatable).
     #[arg(long)]
     pub allow_host: Vec<String>,
+    /// Folder for load.json and the plots.
     #[arg(long)]
     pub out: PathBuf,
 }
@@ -101,9 +104,9 @@ pub fn load(a: LoadArgs) -> Result<()> {
             rate_hz: a.rate_hz,
             hello: fovea::protocol::Hello {
                 scene: a.scene.clone(),
-                preset: a.preset.clone(),
-                width: a.width,
-                height: a.height,
+                preset: a.preset.to_string(),
+                width: a.size.0,
+                height: a.size.1,
                 ..Default::default()
             },
             seed: a.seed,
@@ -150,7 +153,7 @@ pub fn load(a: LoadArgs) -> Result<()> {
         .max();
     let json = serde_json::json!({
         "url": url,
-        "scene": a.scene, "preset": a.preset, "width": a.width, "height": a.height, "rate_hz": a.rate_hz,
+        "scene": a.scene, "preset": a.preset, "width": a.size.0, "height": a.size.1, "rate_hz": a.rate_hz,
         "budget": { "p95_ms": a.budget_ms, "min_fps": a.min_fps },
         "capacity_sessions": capacity,
         "runs": reports,
@@ -173,5 +176,19 @@ pub fn load(a: LoadArgs) -> Result<()> {
         ),
     }
     eprintln!("wrote {}/load.json and load.svg", a.out.display());
+    // A run in which no session got in measured nothing: say why and fail.
+    if let Some(r) = reports
+        .iter()
+        .find(|r| r.connection_failures + r.refused >= r.sessions as u64)
+    {
+        let why = match (&r.connection_error, r.refused) {
+            (Some(e), _) => format!("cannot connect: {e}"),
+            (None, n) if n > 0 => {
+                format!("{n} of {} sessions refused: server at capacity", r.sessions)
+            }
+            (None, _) => "every session failed before its welcome".to_string(),
+        };
+        bail!("no session connected to {url} with {} sessions ({why}); is `fovea serve` running there?", r.sessions);
+    }
     Ok(())
 }

@@ -3,12 +3,6 @@
 use anyhow::{bail, Context, Result};
 use glam::Vec3;
 
-/// Parses a snake_case name of any of our serde enums.
-pub fn parse_enum<T: serde::de::DeserializeOwned>(s: &str) -> Result<T, String> {
-    serde_json::from_value(serde_json::Value::String(s.to_string()))
-        .map_err(|e| format!("{s:?}: {e}"))
-}
-
 pub fn parse_gaze(s: &str) -> Result<[f32; 2], String> {
     let v: Vec<f32> = s
         .split(',')
@@ -72,4 +66,10 @@ pub fn url_is_allowed(url: &str, allowed: &[String]) -> Result<String> {
         bail!("{url:?}: only loopback servers (127.0.0.0/8, localhost, [::1]) or hosts given with --allow-host may be targeted");
     }
     Ok(url.to_string())
+}
+
+/// The built-in scenes as clap's possible values, so `--help` lists them and a typo is refused
+/// with the list.
+pub fn scene_names() -> clap::builder::PossibleValuesParser {
+    clap::builder::PossibleValuesParser::new(fovea::scene::builtin_names())
 }

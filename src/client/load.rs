@@ -13,7 +13,7 @@ use serde::Serialize;
 use tokio_tungstenite::tungstenite::Message;
 
 use crate::gaze::synthetic::{degrees_to_frame, SyntheticEye};
-use crate::protocol::{decode_frame, Hello};
+use crate::protocol::{decode_frame, Hello, Trigger};
 use crate::viewing::Viewing;
 
 #[derive(Debug, Clone)]
@@ -76,6 +76,9 @@ pub struct LoadReport {
     pub samples_coalesced: u64,
     pub errors: u64,
     pub connection_failures: u64,
+    /// The first connection failure's reason, if any.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub connection_error: Option<String>,
     /// Sessions the server refused (close 1013).
     pub refused: u64,
     /// Frames received per second of the run, all sessions together.
@@ -92,6 +95,8 @@ struct SessionResult {
     gaze_sent: u64,
     errors: u64,
     connect_failed: bool,
+    /// Why the connection failed, when it did.
+    connect_error: Option<String>,
     refused: bool,
 }
 
@@ -168,6 +173,7 @@ pub async fn run(
             .sum(),
         errors: results.iter().map(|r| r.errors).sum(),
         connection_failures: results.iter().filter(|r| r.connect_failed).count() as u64,
+        connection_error: results.iter().find_map(|r| r.connect_error.clone()),
         refused: results.iter().filter(|r| r.refused).count() as u64,
         fps_timeline: timeline.lock().map(|t| t.clone()).unwrap_or_default(),
         histograms: hists,
@@ -185,10 +191,13 @@ async fn session(
     progress: Arc<impl Fn(usize, f64) + Send + Sync>,
 ) -> SessionResult {
     let mut result = SessionResult::default();
-    let Ok((ws, _)) = tokio_tungstenite::connect_async_with_config(&opts.url, None, true).await
-    else {
-        result.connect_failed = true;
-        return result;
+    let ws = match tokio_tungstenite::connect_async_with_config(&opts.url, None, true).await {
+        Ok((ws, _)) => ws,
+        Err(e) => {
+            result.connect_failed = true;
+            result.connect_error = Some(e.to_string());
+            return result;
+        }
     };
     let (mut sink, mut stream) = ws.split();
     let mut hello = serde_json::to_value(&opts.hello).unwrap_or_default();
@@ -249,8 +258,12 @@ async fn session(
                                 *slot += 1;
                             }
                         }
+                        // Only a frame that answers a new sample measures gaze latency; one made
+                        // for the start or a settings change shows an older sample again.
+                        let answers_gaze = h.trigger == Trigger::Gaze;
                         let latency = h
                             .seq
+                            .filter(|_| answers_gaze)
                             .and_then(|s| sent_at.lock().ok().and_then(|m| m.get(&s).copied()))
                             .map(|t| now - t);
                         if let Ok(mut hs) = hists.lock() {
@@ -262,7 +275,9 @@ async fn session(
                             if let Some(l) = latency {
                                 rec("latency", l);
                             }
-                            rec("queue", h.stages_ms.queue);
+                            if answers_gaze {
+                                rec("queue", h.stages_ms.queue);
+                            }
                             rec("render", h.stages_ms.render);
                             rec("readback", h.stages_ms.readback);
                             rec("encode", h.stages_ms.encode);

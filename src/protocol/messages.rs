@@ -123,6 +123,10 @@ pub struct Welcome {
     pub limits: Limits,
     /// The GPU adapter frames come from, e.g. "llvmpipe (LLVM 15.0.6, 256 bits) (Vulkan)".
     pub adapter: String,
+    /// Where this session's own gaze recording can be downloaded (relative URL with its key),
+    /// when the server records.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub recording: Option<String>,
 }
 
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]

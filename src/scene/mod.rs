@@ -91,11 +91,9 @@ pub struct Scene {
     pub placed: Vec<Placed>,
 }
 
-pub fn builtin_names() -> Vec<String> {
-    BUILTIN_SCENES
-        .iter()
-        .map(|(n, _)| (*n).to_string())
-        .collect()
+/// The built-in scenes' names, default first.
+pub fn builtin_names() -> Vec<&'static str> {
+    BUILTIN_SCENES.iter().map(|(n, _)| *n).collect()
 }
 
 /// A unit square in XZ centred on the origin, facing +Y (two counter-clockwise triangles).

@@ -15,6 +15,7 @@ pub fn router(state: Arc<ServerState>) -> Router {
         .route("/healthz", get(|| async { "ok\n" }))
         .route("/readyz", get(readyz))
         .route("/metrics", get(metrics_text))
+        .route("/recordings/{id}", get(super::recordings::download))
         .fallback(get(static_file))
         .with_state(state)
 }

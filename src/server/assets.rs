@@ -17,6 +17,11 @@ const FILES: &[(&str, &str, &[u8])] = &[
         include_bytes!("../../web/overlay.js"),
     ),
     (
+        "/ui.js",
+        "text/javascript; charset=utf-8",
+        include_bytes!("../../web/ui.js"),
+    ),
+    (
         "/style.css",
         "text/css; charset=utf-8",
         include_bytes!("../../web/style.css"),

@@ -46,7 +46,7 @@ pub async fn make(render: RenderHandle, job: FrameJob) -> Result<MadeFrame, Fram
             format!("frame {frame_no}: {what}: {e}"),
         ),
     };
-    let mut times = FrameTimes::new(job.ticket.arrived, Instant::now());
+    let mut times = FrameTimes::new(job.ticket.trigger, job.ticket.arrived, Instant::now());
     let rendered = render
         .render(job.request.clone())
         .await

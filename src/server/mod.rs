@@ -9,6 +9,7 @@ mod frame_maker;
 pub mod metrics;
 mod pacing;
 mod recorder;
+mod recordings;
 mod session;
 mod timing;
 
@@ -48,6 +49,8 @@ pub struct ServerState {
     pub sessions: TaskTracker,
     /// Where sessions' received gaze samples are recorded, if anywhere (opt-in).
     pub record_dir: Option<std::path::PathBuf>,
+    /// Each recording session's file, fetchable by its own client only.
+    pub recordings: recordings::Recordings,
     /// One permit per session: admission control (a new client past the limit is refused
     /// with 1013 and `/readyz` reports not ready).
     pub slots: Arc<tokio::sync::Semaphore>,
@@ -97,9 +100,9 @@ pub async fn run_with(
     }
     let scenes = crate::scene::builtin_names()
         .into_iter()
-        .filter_map(|name| match crate::scene::Scene::builtin(&name) {
+        .filter_map(|name| match crate::scene::Scene::builtin(name) {
             Ok(s) => Some(SceneInfo {
-                name,
+                name: name.to_string(),
                 triangles: s.mesh.triangle_count(),
             }),
             Err(e) => {
@@ -116,6 +119,7 @@ pub async fn run_with(
         shutdown: shutdown.clone(),
         sessions: TaskTracker::new(),
         record_dir: options.record_dir,
+        recordings: Default::default(),
         slots: Arc::new(tokio::sync::Semaphore::new(options.max_sessions.max(1))),
         max_sessions: options.max_sessions.max(1),
         stall_timeout: options.stall_timeout,

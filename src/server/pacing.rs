@@ -136,8 +136,9 @@ impl Pacer {
         })
     }
 
-    /// A frame reached the socket: the client is alive.
-    pub fn frame_sent(&mut self, now: Instant) {
+    /// A frame is ready for the socket, or reached it: the stall clock restarts, so a frame made
+    /// long after the last ack gives the client a full `stall_timeout` to acknowledge it.
+    pub fn frame_out(&mut self, now: Instant) {
         self.last_progress = now;
     }
 
@@ -272,10 +273,25 @@ mod tests {
         assert_eq!(p.stall_deadline(false), None, "nothing outstanding");
         let f1 = p.next_frame().unwrap();
         assert_eq!(p.stall_deadline(true), None, "a frame is being made");
-        p.frame_sent(ms(t0, 100));
+        p.frame_out(ms(t0, 100));
         assert_eq!(p.stall_deadline(false), Some(ms(t0, 100) + STALL));
         p.on_ack(f1.frame, ms(t0, 500)).unwrap();
         assert_eq!(p.stall_deadline(false), None);
+    }
+
+    #[test]
+    fn a_frame_made_long_after_the_last_ack_does_not_stall_at_once() {
+        // Found by the browser test: a settings change after 15 s idle made a frame whose
+        // stall clock had started at the last ack, so the client was dropped at once.
+        let t0 = Instant::now();
+        let mut p = Pacer::new(2, STALL, t0);
+        let f1 = p.next_frame().unwrap();
+        p.frame_out(ms(t0, 100));
+        p.on_ack(f1.frame, ms(t0, 200)).unwrap();
+        p.on_settings(ms(t0, 15_000));
+        p.next_frame().unwrap();
+        p.frame_out(ms(t0, 15_150));
+        assert_eq!(p.stall_deadline(false), Some(ms(t0, 15_150) + STALL));
     }
 
     #[test]

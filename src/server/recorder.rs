@@ -16,6 +16,7 @@ pub struct Recorder {
     /// Times are written relative to the first sample.
     t0: Option<f64>,
     error: Option<std::io::Error>,
+    flushed: std::time::Instant,
 }
 
 impl Recorder {
@@ -30,10 +31,17 @@ impl Recorder {
             path,
             t0: None,
             error: None,
+            flushed: std::time::Instant::now(),
         })
     }
 
-    /// Appends one sample; the first write error is kept and reported by `finish`.
+    /// Where the file is while the session lives, and where it goes when it ends.
+    pub fn paths(&self) -> (PathBuf, PathBuf) {
+        (self.partial.clone(), self.path.clone())
+    }
+
+    /// Appends one sample; the first write error is kept and reported by `finish`. Rows reach
+    /// the file at least once a second, so a download mid-session is at most a second behind.
     pub fn write(&mut self, g: &Gaze) {
         if self.error.is_some() {
             return;
@@ -42,6 +50,13 @@ impl Recorder {
         let pupil = g.pupil_mm.map(|p| p.to_string()).unwrap_or_default();
         if let Err(e) = writeln!(self.writer, "{},{},{},{}", g.t_ms - t0, g.x, g.y, pupil) {
             self.error = Some(e);
+            return;
+        }
+        if self.flushed.elapsed() >= std::time::Duration::from_secs(1) {
+            self.flushed = std::time::Instant::now();
+            if let Err(e) = self.writer.flush() {
+                self.error = Some(e);
+            }
         }
     }
 

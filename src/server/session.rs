@@ -199,6 +199,15 @@ impl Session {
                 Err(e) => Some(knob_error(e)),
             },
             ClientMessage::Ack(ack) => match pacer.on_ack(ack.frame, now) {
+                Ok(()) if tracing::enabled!(tracing::Level::TRACE) => {
+                    tracing::trace!(
+                        session = self.id,
+                        frame = ack.frame,
+                        dropped = ack.dropped,
+                        "ack"
+                    );
+                    None
+                }
                 Ok(()) => None,
                 Err(made) => Some(error(
                     ErrorCode::BadAck,
@@ -256,6 +265,10 @@ impl Session {
             max_in_flight: hello.max_in_flight,
             limits: state.limits.clone(),
             adapter: state.render.adapter().to_string(),
+            recording: self.recorder.as_ref().map(|r| {
+                let (partial, done) = r.paths();
+                state.recordings.register(self.id, partial, done)
+            }),
         };
         let viewing = Viewing::new(hello.display, hello.width, hello.height);
         self.predictor = Some(Predictor::new(viewing.field_of_view_deg()));
@@ -309,7 +322,12 @@ impl Session {
     /// A frame is ready (queue it for the socket) or failed (return its credit, tell the client).
     fn frame_made(&mut self, made: Result<MadeFrame, FrameFailed>) -> Vec<Outgoing> {
         match made {
-            Ok(f) => vec![Outgoing::Frame(f.bytes, f.times)],
+            Ok(f) => {
+                if let Some(p) = self.pacer.as_mut() {
+                    p.frame_out(Instant::now());
+                }
+                vec![Outgoing::Frame(f.bytes, f.times)]
+            }
             Err(f) => {
                 if let Some(p) = self.pacer.as_mut() {
                     p.frame_failed(f.frame);
@@ -336,11 +354,11 @@ impl Session {
             send_ms = times.send_ms(),
             "frame sent"
         );
-        if let Some(ms) = times.total_ms() {
+        if let Some(ms) = times.total_ms().filter(|_| times.answers_gaze()) {
             self.latency_ms = Some(self.latency_ms.map_or(ms, |l| 0.8 * l + 0.2 * ms));
         }
         if let (Some(p), Some(at)) = (self.pacer.as_mut(), times.sent) {
-            p.frame_sent(at);
+            p.frame_out(at);
         }
     }
 

@@ -4,10 +4,12 @@
 
 use std::time::{Duration, Instant};
 
-use crate::protocol::StageTimes;
+use crate::protocol::{StageTimes, Trigger};
 
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct FrameTimes {
+    /// What the frame answers.
+    pub trigger: Trigger,
     /// The sample, settings change or hello this frame answers arrived.
     pub arrived: Instant,
     /// The job went to the render thread's queue.
@@ -31,8 +33,9 @@ fn ms(from: Instant, to: Instant) -> f64 {
 impl FrameTimes {
     /// A frame that arrived at `arrived` and was queued now; later moments are filled in as
     /// they happen (until then they equal `queued`).
-    pub fn new(arrived: Instant, queued: Instant) -> FrameTimes {
+    pub fn new(trigger: Trigger, arrived: Instant, queued: Instant) -> FrameTimes {
         FrameTimes {
+            trigger,
             arrived,
             queued,
             render_start: queued,
@@ -71,11 +74,23 @@ impl FrameTimes {
         self.sent.map(|s| ms(self.arrived, s))
     }
 
-    /// Records every stage in the `fovea_stage_seconds` histograms.
+    /// Whether the frame answers a new gaze sample, so its wait is a gaze latency (frames
+    /// made for the start or a settings change are left out of latency statistics).
+    pub fn answers_gaze(&self) -> bool {
+        self.trigger == Trigger::Gaze
+    }
+
+    /// Records the stages in the `fovea_stage_seconds` histograms (the queue stage and the
+    /// gaze-to-sent total for gaze frames only).
     pub fn record_metrics(&self) {
         let s = self.stages();
+        if self.answers_gaze() {
+            super::metrics::stage("queue", s.queue);
+            if let Some(total) = self.total_ms() {
+                metrics::histogram!("fovea_gaze_to_sent_seconds").record(total / 1e3);
+            }
+        }
         for (stage, v) in [
-            ("queue", s.queue),
             ("render", s.render),
             ("readback", s.readback),
             ("encode", s.encode),
@@ -96,7 +111,7 @@ mod tests {
     fn stages_come_from_one_record_and_add_up() {
         let t0 = Instant::now();
         let at = |ms: u64| t0 + Duration::from_millis(ms);
-        let mut t = FrameTimes::new(t0, at(2));
+        let mut t = FrameTimes::new(Trigger::Gaze, t0, at(2));
         t.rendered(at(5), Duration::from_millis(10), Duration::from_millis(3));
         t.encode_start = at(19);
         t.encode_end = at(23);
@@ -113,7 +128,8 @@ mod tests {
     #[test]
     fn out_of_order_moments_give_zero_not_negative_times() {
         let t0 = Instant::now();
-        let t = FrameTimes::new(t0 + Duration::from_millis(5), t0);
+        let t = FrameTimes::new(Trigger::Settings, t0 + Duration::from_millis(5), t0);
+        assert!(!t.answers_gaze());
         assert_eq!(t.stages().queue, 0.0);
     }
 }

@@ -3,8 +3,11 @@
 
 use crate::gaze::Sample;
 
-#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[derive(
+    Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize, clap::ValueEnum,
+)]
 #[serde(rename_all = "snake_case")]
+#[value(rename_all = "snake_case")]
 pub enum Format {
     /// `t_s, xpos, ypos, ps`: seconds, pixels on a stated screen, pupil AREA (arbitrary units).
     Eyelink,
