@@ -369,3 +369,53 @@ fn render(
     );
     Ok(())
 }
+
+#[cfg(test)]
+mod tests {
+    use clap::CommandFactory;
+
+    #[test]
+    fn every_flag_of_every_command_is_described() {
+        let cli = super::Cli::command();
+        let mut bare = Vec::new();
+        for sub in cli.get_subcommands() {
+            assert!(
+                sub.get_about().is_some(),
+                "fovea {} has no description",
+                sub.get_name()
+            );
+            for arg in sub.get_arguments() {
+                if arg.is_hide_set() || matches!(arg.get_id().as_str(), "help" | "version") {
+                    continue;
+                }
+                if arg.get_help().is_none() && arg.get_long_help().is_none() {
+                    bare.push(format!("fovea {} --{}", sub.get_name(), arg.get_id()));
+                }
+            }
+        }
+        assert!(
+            bare.is_empty(),
+            "flags without a description:\n{}",
+            bare.join("\n")
+        );
+    }
+
+    #[test]
+    fn sizes_and_durations_have_one_spelling() {
+        let cli = super::Cli::command();
+        for sub in cli.get_subcommands() {
+            for arg in sub.get_arguments() {
+                let long = arg.get_long().unwrap_or_default();
+                assert!(
+                    !matches!(
+                        long,
+                        "width" | "height" | "sizes" | "duration-s" | "start-s"
+                    ),
+                    "fovea {} --{long}: use --size WxH and --duration / --start",
+                    sub.get_name()
+                );
+            }
+        }
+        cli.debug_assert();
+    }
+}

@@ -252,3 +252,56 @@ async fn three_sessions_share_the_renderer_fairly() {
     );
     shutdown.stop().await;
 }
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn metrics_describe_every_series_before_the_first_session() {
+    let _serial = SERIAL.lock().await;
+    let (addr, running) = server(ServerOptions::default()).await;
+    let text = http_get(addr, "/metrics").await;
+    for name in [
+        "fovea_sessions_total",
+        "fovea_sessions_refused_total",
+        "fovea_sessions_stalled_total",
+        "fovea_sessions_active",
+        "fovea_frames_rendered_total",
+        "fovea_frames_sent_total",
+        "fovea_frames_failed_total",
+        "fovea_frames_skipped_total",
+        "fovea_gaze_samples_total",
+        "fovea_gaze_coalesced_total",
+    ] {
+        assert!(
+            text.contains(&format!("# HELP {name} ")),
+            "no HELP for {name}:\n{text}"
+        );
+        assert!(
+            text.lines()
+                .any(|l| l.starts_with(name) && !l.starts_with('#')),
+            "{name} has no value before any session:\n{text}"
+        );
+    }
+    running.stop().await;
+}
+
+#[test]
+fn load_against_a_closed_port_fails_and_says_why() {
+    // A port nothing listens on: bind one, note it, let it go.
+    let port = std::net::TcpListener::bind("127.0.0.1:0")
+        .and_then(|l| l.local_addr())
+        .unwrap()
+        .port();
+    let out_dir = std::env::temp_dir().join(format!("fovea-load-closed-{}", std::process::id()));
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_fovea"))
+        .args(["load", "--url", &format!("ws://127.0.0.1:{port}/ws")])
+        .args(["--sessions", "2", "--duration", "1", "--out"])
+        .arg(&out_dir)
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success(), "exit status {}", out.status);
+    assert!(stderr.contains("no session connected"), "{stderr}");
+    assert!(
+        stderr.contains("fovea serve"),
+        "the message names the likely fix: {stderr}"
+    );
+}
