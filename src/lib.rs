@@ -21,6 +21,7 @@
 //! - [`server`]: the axum app: static page, `/ws` sessions, health and metrics.
 //! - [`client`]: a Rust WebSocket client speaking the protocol (tests, replay, load).
 //! - [`bench`]: the speed/accuracy sweep behind `fovea bench`.
+//! - [`plot`]: the bench, load and gaze plots, SVG and PNG from the same code (`plotters`).
 //!
 //! The arrows between them point one way; `tests/boundaries.rs` fails on a forbidden one and
 //! `docs/architecture.md` draws them.
@@ -31,6 +32,7 @@ pub mod encode;
 pub mod foveation;
 pub mod gaze;
 pub mod optics;
+pub mod plot;
 pub mod protocol;
 pub mod quality;
 pub mod radiosity;

@@ -131,6 +131,11 @@ enum Command {
     /// result against direct light only and radiosity off; writes DIR/radiosity.json, .md and
     /// the direct / with-radiosity images.
     Radiosity(RadiosityArgs),
+    /// Redraw the plots of a bench.json or load.json (SVG and PNG beside it).
+    Plot {
+        /// A bench.json (fovea bench) or load.json (fovea load).
+        file: PathBuf,
+    },
 }
 
 fn main() -> Result<()> {
@@ -168,6 +173,7 @@ fn main() -> Result<()> {
         Command::Gaze(args) => gaze(args),
         Command::Load(args) => load(args),
         Command::Radiosity(args) => radiosity(args),
+        Command::Plot { file } => plot(&file),
         Command::Render {
             scene,
             scene_file,
@@ -228,6 +234,27 @@ fn main() -> Result<()> {
             render(request, own, &out, quality, frames)
         }
     }
+}
+
+fn plot(file: &std::path::Path) -> Result<()> {
+    let text =
+        std::fs::read_to_string(file).with_context(|| format!("reading {}", file.display()))?;
+    let json: serde_json::Value =
+        serde_json::from_str(&text).with_context(|| format!("parsing {}", file.display()))?;
+    let dir = file.parent().unwrap_or(std::path::Path::new("."));
+    if json.get("runs").is_some() {
+        cli::load::plot_load(&json, dir)?;
+        eprintln!("wrote {}/load.svg, load.png and load-N.*", dir.display());
+    } else if json.get("records").is_some() {
+        let report: fovea::bench::BenchReport = serde_json::from_value(json)
+            .with_context(|| format!("{} is not a bench report", file.display()))?;
+        let plot = fovea::plot::bench::BenchPlot::of(&report);
+        fovea::plot::write(&plot, &dir.join("bench"))?;
+        eprintln!("wrote {}/bench.svg and bench.png", dir.display());
+    } else {
+        bail!("{}: neither a bench.json nor a load.json", file.display());
+    }
+    Ok(())
 }
 
 fn serve(addr: SocketAddr, options: fovea::server::ServerOptions) -> Result<()> {

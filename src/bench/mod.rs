@@ -7,7 +7,6 @@
 
 mod configs;
 mod ground_truth;
-mod plot;
 mod report;
 mod run;
 

@@ -270,13 +270,17 @@ impl BenchReport {
     }
 }
 
-/// Writes `bench.json`, `bench.md` and `bench.svg` into `dir`.
+/// Writes `bench.json`, `bench.md`, and the cost-vs-error plot as `bench.svg` and `bench.png`.
 pub fn write_reports(report: &BenchReport, dir: &Path) -> std::io::Result<()> {
     std::fs::create_dir_all(dir)?;
     let json = serde_json::to_string_pretty(report).map_err(std::io::Error::other)?;
     write_atomic(&dir.join("bench.json"), json.as_bytes())?;
     write_atomic(&dir.join("bench.md"), report.markdown().as_bytes())?;
-    write_atomic(&dir.join("bench.svg"), super::plot::svg(report).as_bytes())?;
+    crate::plot::write(
+        &crate::plot::bench::BenchPlot::of(report),
+        &dir.join("bench"),
+    )
+    .map_err(std::io::Error::other)?;
     Ok(())
 }
 

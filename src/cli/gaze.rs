@@ -127,6 +127,9 @@ pub struct GazeArgs {
     /// Viewing distance the recording was made at, cm.
     #[arg(long, default_value_t = 60.0)]
     pub distance_cm: f64,
+    /// Also write the table (gaze.md) and the error-vs-horizon plot (gaze.svg, gaze.png) here.
+    #[arg(long)]
+    pub out: Option<PathBuf>,
 }
 
 pub fn replay(a: ReplayArgs) -> Result<()> {
@@ -193,12 +196,11 @@ pub fn gaze(a: GazeArgs) -> Result<()> {
         .map(parse_size)
         .transpose()?
         .unwrap_or((1920, 1080));
-    let viewing = fovea::viewing::Viewing {
-        width: w,
-        height: h,
+    let display = fovea::viewing::Display {
         width_cm: a.display_width_cm,
         distance_cm: a.distance_cm,
     };
+    let viewing = fovea::viewing::Viewing::new(display, w, h);
     let horizons: Vec<f64> = a
         .horizons
         .split(',')
@@ -206,6 +208,22 @@ pub fn gaze(a: GazeArgs) -> Result<()> {
         .collect::<Result<_, _>>()
         .context("--horizons: numbers in ms")?;
     let rows = fovea::gaze::evaluate::evaluate(&rec.samples, &viewing, &horizons);
-    println!("{}", fovea::gaze::evaluate::markdown(&rows));
+    let table = fovea::gaze::evaluate::markdown(&rows);
+    println!("{table}");
+    if let Some(dir) = &a.out {
+        std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
+        std::fs::write(dir.join("gaze.md"), &table)?;
+        let name = a
+            .recording
+            .file
+            .file_name()
+            .map(|n| n.to_string_lossy().into_owned());
+        let title = format!("Gaze prediction error: {}", name.unwrap_or_default());
+        fovea::plot::write(
+            &fovea::plot::gaze::GazePlot { title, rows },
+            &dir.join("gaze"),
+        )?;
+        eprintln!("wrote {0}/gaze.md, gaze.svg and gaze.png", dir.display());
+    }
     Ok(())
 }

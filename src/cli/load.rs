@@ -135,10 +135,6 @@ pub fn load(a: LoadArgs) -> Result<()> {
             report.refused,
             report.connection_failures
         );
-        std::fs::write(
-            a.out.join(format!("load-{n}.svg")),
-            fovea::client::load::svg(&report),
-        )?;
         reports.push(report);
     }
     let capacity = reports
@@ -162,9 +158,7 @@ pub fn load(a: LoadArgs) -> Result<()> {
         a.out.join("load.json"),
         serde_json::to_string_pretty(&json)?,
     )?;
-    if let Some(last) = reports.last() {
-        std::fs::write(a.out.join("load.svg"), fovea::client::load::svg(last))?;
-    }
+    plot_load(&json, &a.out)?;
     match capacity {
         Some(c) => println!(
             "capacity within budget (p95 ≤ {} ms, ≥ {} fps per session): {c} sessions",
@@ -175,7 +169,10 @@ pub fn load(a: LoadArgs) -> Result<()> {
             a.budget_ms, a.min_fps
         ),
     }
-    eprintln!("wrote {}/load.json and load.svg", a.out.display());
+    eprintln!(
+        "wrote {0}/load.json, load.svg/.png and load-N.svg/.png per run",
+        a.out.display()
+    );
     // A run in which no session got in measured nothing: say why and fail.
     if let Some(r) = reports
         .iter()
@@ -190,5 +187,31 @@ pub fn load(a: LoadArgs) -> Result<()> {
         };
         bail!("no session connected to {url} with {} sessions ({why}); is `fovea serve` running there?", r.sessions);
     }
+    Ok(())
+}
+
+/// The sweep plot (`load.svg`, `load.png`) and each run's timeline (`load-N.*`) from the
+/// report's JSON, so `fovea plot load.json` redraws exactly what a run drew.
+pub fn plot_load(json: &serde_json::Value, dir: &std::path::Path) -> Result<()> {
+    use fovea::plot::load::{Run, SweepPlot, TimelinePlot};
+    let runs: Vec<Run> = serde_json::from_value(json["runs"].clone()).context("load.json runs")?;
+    let what = format!(
+        "{} {} {}x{} at {} Hz",
+        json["scene"].as_str().unwrap_or("?"),
+        json["preset"].as_str().unwrap_or("?"),
+        json["width"],
+        json["height"],
+        json["rate_hz"]
+    );
+    for run in &runs {
+        let title = format!("fovea load, {} sessions: {what}", run.sessions);
+        let plot = TimelinePlot {
+            title,
+            run: run.clone(),
+        };
+        fovea::plot::write(&plot, &dir.join(format!("load-{}", run.sessions)))?;
+    }
+    let title = format!("fovea load: {what}");
+    fovea::plot::write(&SweepPlot { title, runs }, &dir.join("load"))?;
     Ok(())
 }

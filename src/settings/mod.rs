@@ -236,8 +236,14 @@ pub struct RenderSettings {
     pub dof: bool,
     pub overlay: Overlay,
     /// In scenes with radiosity, add its interreflected light to the direct light (off: area
-    /// lights' direct light only, for comparison).
+    /// lights' direct light only, for comparison). Reports written before the knob existed
+    /// read as on.
+    #[serde(default = "yes")]
     pub indirect: bool,
+}
+
+fn yes() -> bool {
+    true
 }
 
 /// Knobs about the viewer's eye rather than the image; they never reach the renderer.

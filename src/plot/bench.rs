@@ -1,0 +1,210 @@
+//! The bench's cost-vs-error chart: one point per configuration (medians over the run's
+//! groups) on a log time axis, the Pareto front drawn and its points labelled, presets in
+//! bold, the legend inside the plot.
+
+use std::collections::BTreeMap;
+
+use plotters::coord::Shift;
+use plotters::prelude::*;
+
+use super::{colour, err, padded, Plot};
+use crate::bench::{pareto_front, BenchReport};
+
+/// One configuration's medians.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Point {
+    pub name: String,
+    pub frame_ms: f64,
+    pub flip: f64,
+    pub preset: bool,
+    pub pareto: bool,
+}
+
+pub struct BenchPlot {
+    pub title: String,
+    pub points: Vec<Point>,
+}
+
+/// Tick values 1, 2, 5 × 10ⁿ around [lo, hi]: readable labels on a log axis.
+fn one_two_five(lo: f64, hi: f64) -> Vec<f64> {
+    let mut out = Vec::new();
+    let mut decade = 10f64.powf((lo / 1.3).max(1e-6).log10().floor());
+    while decade <= hi * 1.3 {
+        for m in [1.0, 2.0, 5.0] {
+            let v = m * decade;
+            if v >= lo / 1.3 && v <= hi * 1.3 {
+                out.push(v);
+            }
+        }
+        decade *= 10.0;
+    }
+    out
+}
+
+fn median(mut v: Vec<f64>) -> f64 {
+    v.sort_by(|a, b| a.total_cmp(b));
+    v[v.len() / 2]
+}
+
+impl BenchPlot {
+    pub fn of(report: &BenchReport) -> BenchPlot {
+        let mut by_config: BTreeMap<&str, (Vec<f64>, Vec<f64>)> = BTreeMap::new();
+        let mut order = Vec::new();
+        for r in &report.records {
+            let e = by_config.entry(&r.config).or_insert_with(|| {
+                order.push(r.config.as_str());
+                (Vec::new(), Vec::new())
+            });
+            e.0.push(r.frame_ms.median);
+            e.1.push(r.errors.flip);
+        }
+        let mut points: Vec<Point> = order
+            .iter()
+            .filter_map(|name| {
+                let (t, f) = by_config.get(name)?;
+                Some(Point {
+                    name: name.to_string(),
+                    frame_ms: median(t.clone()),
+                    flip: median(f.clone()),
+                    preset: crate::settings::Preset::from_name(name).is_some(),
+                    pareto: false,
+                })
+            })
+            .filter(|p| p.frame_ms.is_finite() && p.flip.is_finite() && p.frame_ms > 0.0)
+            .collect();
+        let coords: Vec<(f64, f64)> = points.iter().map(|p| (p.frame_ms, p.flip)).collect();
+        for i in pareto_front(&coords) {
+            points[i].pareto = true;
+        }
+        BenchPlot {
+            title: format!(
+                "Cost vs error against the reference, {}",
+                report.machine.adapter.split(" (").next().unwrap_or("?")
+            ),
+            points,
+        }
+    }
+}
+
+impl Plot for BenchPlot {
+    fn size(&self) -> (u32, u32) {
+        (1000, 640)
+    }
+
+    fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> Result<(), String> {
+        root.fill(&WHITE).map_err(err)?;
+        let title = if self.title.chars().count() > 90 {
+            format!("{}…", self.title.chars().take(89).collect::<String>())
+        } else {
+            self.title.clone()
+        };
+        if self.points.is_empty() {
+            root.draw(&Text::new("no measurements", (40, 60), ("sans-serif", 20)))
+                .map_err(err)?;
+            return Ok(());
+        }
+        let (tlo, thi) = self.points.iter().fold((f64::MAX, f64::MIN), |(a, b), p| {
+            (a.min(p.frame_ms), b.max(p.frame_ms))
+        });
+        let fhi = self.points.iter().map(|p| p.flip).fold(0.0, f64::max);
+        let mut chart = ChartBuilder::on(root)
+            .caption(title, ("sans-serif", 18).into_font().style(FontStyle::Bold))
+            .margin(16)
+            .x_label_area_size(48)
+            .y_label_area_size(70)
+            .build_cartesian_2d(
+                padded(tlo, thi, true)
+                    .log_scale()
+                    .with_key_points(one_two_five(tlo, thi)),
+                padded(0.0, fhi, false),
+            )
+            .map_err(err)?;
+        chart
+            .configure_mesh()
+            .light_line_style(WHITE.mix(0.0))
+            .x_desc("median frame time, ms (log scale)")
+            .y_desc("mean FLIP against the reference")
+            .axis_desc_style(("sans-serif", 15))
+            .label_style(("sans-serif", 13))
+            .x_label_formatter(&|v| format!("{v:.0}"))
+            .y_label_formatter(&|v| format!("{v:.3}"))
+            .draw()
+            .map_err(err)?;
+        let mut front: Vec<&Point> = self.points.iter().filter(|p| p.pareto).collect();
+        front.sort_by(|a, b| a.frame_ms.total_cmp(&b.frame_ms));
+        chart
+            .draw_series(LineSeries::new(
+                front.iter().map(|p| (p.frame_ms, p.flip)),
+                colour(1).stroke_width(2),
+            ))
+            .map_err(err)?
+            .label("Pareto front")
+            .legend(|(x, y)| {
+                PathElement::new(vec![(x, y), (x + 20, y)], colour(1).stroke_width(2))
+            });
+        for (preset, name) in [(true, "preset"), (false, "other configuration")] {
+            let c = if preset { colour(0) } else { colour(5) };
+            let size = if preset { 6 } else { 4 };
+            chart
+                .draw_series(
+                    self.points
+                        .iter()
+                        .filter(|p| p.preset == preset)
+                        .map(|p| Circle::new((p.frame_ms, p.flip), size, c.filled())),
+                )
+                .map_err(err)?
+                .label(name)
+                .legend(move |(x, y)| Circle::new((x + 10, y), size, c.filled()));
+        }
+        // Labels: presets first, then the rest of the front; each takes the first spot around
+        // its point that overlaps no label already placed, or is left out.
+        let mut placed: Vec<(i32, i32, i32, i32)> = Vec::new();
+        let mut labelled: Vec<&Point> = self.points.iter().filter(|p| p.preset).collect();
+        labelled.extend(self.points.iter().filter(|p| p.pareto && !p.preset));
+        for p in labelled {
+            let (px, py) = chart.backend_coord(&(p.frame_ms, p.flip));
+            let w = 7 * p.name.chars().count() as i32 + 4;
+            let spots = [
+                (8, -18),
+                (8, 6),
+                (-w - 8, -18),
+                (-w - 8, 6),
+                (-w / 2, -26),
+                (-w / 2, 12),
+            ];
+            let free = spots.iter().find(|(dx, dy)| {
+                let b = (px + dx, py + dy, px + dx + w, py + dy + 15);
+                let (wmax, hmax) = root.dim_in_pixel();
+                b.0 >= 0
+                    && b.2 <= wmax as i32
+                    && b.1 >= 0
+                    && b.3 <= hmax as i32
+                    && !placed
+                        .iter()
+                        .any(|o| b.0 < o.2 && o.0 < b.2 && b.1 < o.3 && o.1 < b.3)
+            });
+            let Some(&(dx, dy)) = free else { continue };
+            placed.push((px + dx, py + dy, px + dx + w, py + dy + 15));
+            let style = ("sans-serif", 12).into_font().style(if p.preset {
+                FontStyle::Bold
+            } else {
+                FontStyle::Normal
+            });
+            chart
+                .draw_series(std::iter::once(
+                    EmptyElement::at((p.frame_ms, p.flip))
+                        + Text::new(p.name.clone(), (dx, dy), style),
+                ))
+                .map_err(err)?;
+        }
+        chart
+            .configure_series_labels()
+            .position(SeriesLabelPosition::UpperRight)
+            .background_style(WHITE.mix(0.9))
+            .border_style(BLACK.mix(0.4))
+            .label_font(("sans-serif", 13))
+            .draw()
+            .map_err(err)?;
+        Ok(())
+    }
+}

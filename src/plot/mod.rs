@@ -1,0 +1,89 @@
+//! Plots people can read, drawn with `plotters` to SVG and PNG from the same code: the bench's
+//! cost-vs-error chart ([`bench`]), the load sweep ([`load`]) and gaze prediction error
+//! against horizon ([`gaze`]). Labels use DejaVu Sans, embedded, so a PNG looks the same on
+//! every machine.
+
+pub mod bench;
+pub mod gaze;
+pub mod load;
+
+use std::path::{Path, PathBuf};
+use std::sync::OnceLock;
+
+use plotters::coord::Shift;
+use plotters::prelude::*;
+
+#[derive(Debug, thiserror::Error)]
+pub enum PlotError {
+    #[error("drawing {path}: {message}")]
+    Draw { path: PathBuf, message: String },
+    #[error("the embedded font does not load")]
+    Font,
+}
+
+/// Registers the embedded font once; every plot asks for "sans-serif".
+fn font() -> Result<(), PlotError> {
+    static DONE: OnceLock<bool> = OnceLock::new();
+    let ok = *DONE.get_or_init(|| {
+        let bytes = include_bytes!("../../assets/fonts/DejaVuSans.ttf");
+        plotters::style::register_font("sans-serif", FontStyle::Normal, bytes).is_ok()
+            && plotters::style::register_font("sans-serif", FontStyle::Bold, bytes).is_ok()
+    });
+    ok.then_some(()).ok_or(PlotError::Font)
+}
+
+/// A plot drawn on any backend: the same function makes the SVG and the PNG.
+pub trait Plot {
+    fn size(&self) -> (u32, u32);
+    fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> Result<(), String>;
+}
+
+/// Writes `base.svg` and `base.png`.
+pub fn write(plot: &impl Plot, base: &Path) -> Result<(), PlotError> {
+    font()?;
+    let size = plot.size();
+    let svg = base.with_extension("svg");
+    let png = base.with_extension("png");
+    let fail = |path: &Path, message: String| PlotError::Draw {
+        path: path.to_path_buf(),
+        message,
+    };
+    {
+        let root = SVGBackend::new(&svg, size).into_drawing_area();
+        plot.draw(&root).map_err(|e| fail(&svg, e))?;
+        root.present().map_err(|e| fail(&svg, e.to_string()))?;
+    }
+    let root = BitMapBackend::new(&png, size).into_drawing_area();
+    plot.draw(&root).map_err(|e| fail(&png, e))?;
+    root.present().map_err(|e| fail(&png, e.to_string()))?;
+    Ok(())
+}
+
+/// Plotters' errors carry the backend's error type; plots report them as text.
+fn err<E: std::fmt::Debug>(e: E) -> String {
+    format!("{e:?}")
+}
+
+const PALETTE: [RGBColor; 6] = [
+    RGBColor(31, 119, 180),
+    RGBColor(214, 39, 40),
+    RGBColor(44, 160, 44),
+    RGBColor(255, 127, 14),
+    RGBColor(148, 103, 189),
+    RGBColor(127, 127, 127),
+];
+
+fn colour(i: usize) -> RGBColor {
+    PALETTE[i % PALETTE.len()]
+}
+
+/// A range with a little room on both sides (and never empty).
+fn padded(lo: f64, hi: f64, log: bool) -> std::ops::Range<f64> {
+    if log {
+        let (lo, hi) = (lo.max(1e-6), hi.max(lo.max(1e-6) * 1.01));
+        (lo / 1.3)..(hi * 1.3)
+    } else {
+        let span = (hi - lo).max(hi.abs() * 0.1).max(1e-6);
+        (lo - 0.08 * span).min(if lo >= 0.0 { 0.0 } else { lo })..(hi + 0.12 * span)
+    }
+}
