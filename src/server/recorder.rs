@@ -25,6 +25,8 @@ impl Recorder {
         let partial = dir.join(format!("session-{session}.csv.partial"));
         let mut writer = BufWriter::new(File::create(&partial)?);
         writer.write_all(b"t_ms,x,y,pupil_mm\n")?;
+        // The header reaches the file at once: a download before the first second is never empty.
+        writer.flush()?;
         Ok(Recorder {
             writer,
             partial,
