@@ -247,5 +247,14 @@ setInterval(() => {
   if (!progress.hidden) document.getElementById('progress-text').textContent = `rendering… ${(waited / 1000).toFixed(1)} s`;
 }, 250);
 
+// ?scene=…&size=WxH&preset=…&codec=… preselect the controls, so a view can be shared as a link.
+const params = new URLSearchParams(location.search);
+for (const name of ['scene', 'size', 'preset', 'codec']) {
+  const v = params.get(name);
+  if (v == null) continue;
+  const sel = controls[name];
+  if (![...sel.options].some((o) => o.value === v)) sel.add(new Option(v, v));
+  sel.value = v;
+}
 bindControls({ connect, sendSettings, sendGaze, resendGaze, setAutoGaze, expectFrame });
 connect();
