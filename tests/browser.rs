@@ -107,9 +107,17 @@ impl Server {
 }
 
 async fn browser() -> (Browser, tokio::task::JoinHandle<()>) {
-    let config = BrowserConfig::builder()
-        .chrome_executable(chromium())
-        .new_headless_mode()
+    let exe = chromium();
+    // Playwright's chrome-headless-shell (the Ubuntu 24.04 route) is the old headless mode
+    // itself and takes no --headless=new.
+    let shell = exe.to_string_lossy().contains("headless");
+    let builder = BrowserConfig::builder().chrome_executable(exe);
+    let builder = if shell {
+        builder
+    } else {
+        builder.new_headless_mode()
+    };
+    let config = builder
         .no_sandbox()
         .window_size(1280, 800)
         .viewport(Viewport {
