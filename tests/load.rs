@@ -305,3 +305,40 @@ fn load_against_a_closed_port_fails_and_says_why() {
         "the message names the likely fix: {stderr}"
     );
 }
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn frames_of_sessions_that_left_are_not_rendered() {
+    let _serial = SERIAL.lock().await;
+    let (addr, running) = server(ServerOptions::default()).await;
+    let url = format!("ws://{addr}/ws");
+    let before = metric(&http_get(addr, "/metrics").await, "fovea_frames_abandoned_total");
+    // Five sessions ask for a slow first frame (720p, every pixel shaded) and leave at once:
+    // one frame is rendering while the others wait, and those must be skipped.
+    for _ in 0..5 {
+        let mut c = Client::connect(&url).await.unwrap();
+        c.hello(&Hello {
+            scene: "bunny-marble".into(),
+            width: 1280,
+            height: 720,
+            preset: "full".into(),
+            ..Hello::default()
+        })
+        .await
+        .unwrap();
+        drop(c);
+    }
+    let deadline = tokio::time::Instant::now() + WAIT;
+    let abandoned = loop {
+        let n = metric(&http_get(addr, "/metrics").await, "fovea_frames_abandoned_total");
+        if n - before >= 3.0 || tokio::time::Instant::now() > deadline {
+            break n - before;
+        }
+        tokio::time::sleep(Duration::from_millis(200)).await;
+    };
+    assert!(abandoned >= 3.0, "{abandoned} of 5 abandoned frames skipped");
+    // The renderer is free for the living.
+    let mut live = Client::connect(&url).await.unwrap();
+    live.hello(&small()).await.unwrap();
+    frame_for(&mut live, 1).await;
+    running.stop().await;
+}

@@ -48,10 +48,20 @@ impl RenderHandle {
         rx.await.map_err(|_| RenderError::ThreadGone)?
     }
 
-    /// Frees what the renderer keeps for `stream`. Never blocks: if the queue is full the
-    /// targets simply age out of the renderer's cache instead.
+    /// Frees what the renderer keeps for `stream` (its targets can be a gigabyte at 4K). Never
+    /// blocks the caller and is never lost: when the queue is full, a task waits for room.
     pub fn release(&self, stream: u64) {
-        let _ = self.tx.try_send(Job::Release(stream));
+        if let Err(mpsc::error::TrySendError::Full(job)) = self.tx.try_send(Job::Release(stream)) {
+            let tx = self.tx.clone();
+            match tokio::runtime::Handle::try_current() {
+                Ok(rt) => {
+                    rt.spawn(async move { tx.send(job).await });
+                }
+                Err(_) => {
+                    let _ = tx.blocking_send(job);
+                }
+            }
+        }
     }
 
     /// The radiosity solves of the scenes loaded so far.
@@ -96,6 +106,13 @@ fn run(mut renderer: Renderer, mut rx: mpsc::Receiver<Job>) {
                 continue;
             }
         };
+        // Work only for the living: a session that ended while its job waited has dropped the
+        // receiver, and nobody would see the frame.
+        if reply.is_closed() {
+            ::metrics::counter!("fovea_frames_abandoned_total").increment(1);
+            tracing::debug!(stream = request.stream, "skipping the frame of a session that has gone");
+            continue;
+        }
         let started = Instant::now();
         let span = tracing::debug_span!("render", w = request.width, h = request.height);
         let _enter = span.enter();
