@@ -311,7 +311,10 @@ async fn frames_of_sessions_that_left_are_not_rendered() {
     let _serial = SERIAL.lock().await;
     let (addr, running) = server(ServerOptions::default()).await;
     let url = format!("ws://{addr}/ws");
-    let before = metric(&http_get(addr, "/metrics").await, "fovea_frames_abandoned_total");
+    let before = metric(
+        &http_get(addr, "/metrics").await,
+        "fovea_frames_abandoned_total",
+    );
     // Five sessions ask for a slow first frame (720p, every pixel shaded) and leave at once:
     // one frame is rendering while the others wait, and those must be skipped.
     for _ in 0..5 {
@@ -329,13 +332,19 @@ async fn frames_of_sessions_that_left_are_not_rendered() {
     }
     let deadline = tokio::time::Instant::now() + WAIT;
     let abandoned = loop {
-        let n = metric(&http_get(addr, "/metrics").await, "fovea_frames_abandoned_total");
+        let n = metric(
+            &http_get(addr, "/metrics").await,
+            "fovea_frames_abandoned_total",
+        );
         if n - before >= 3.0 || tokio::time::Instant::now() > deadline {
             break n - before;
         }
         tokio::time::sleep(Duration::from_millis(200)).await;
     };
-    assert!(abandoned >= 3.0, "{abandoned} of 5 abandoned frames skipped");
+    assert!(
+        abandoned >= 3.0,
+        "{abandoned} of 5 abandoned frames skipped"
+    );
     // The renderer is free for the living.
     let mut live = Client::connect(&url).await.unwrap();
     live.hello(&small()).await.unwrap();

@@ -110,7 +110,10 @@ fn run(mut renderer: Renderer, mut rx: mpsc::Receiver<Job>) {
         // receiver, and nobody would see the frame.
         if reply.is_closed() {
             ::metrics::counter!("fovea_frames_abandoned_total").increment(1);
-            tracing::debug!(stream = request.stream, "skipping the frame of a session that has gone");
+            tracing::debug!(
+                stream = request.stream,
+                "skipping the frame of a session that has gone"
+            );
             continue;
         }
         let started = Instant::now();

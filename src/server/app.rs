@@ -89,7 +89,9 @@ async fn websocket(State(state): State<Arc<ServerState>>, ws: WebSocketUpgrade) 
     ws.on_upgrade(move |socket| async move {
         ::metrics::gauge!("fovea_sessions_active").increment(1.0);
         ::metrics::counter!("fovea_sessions_total").increment(1);
-        session::run(socket, state, id).await;
+        // Every line the session logs, its frames' included, carries its id.
+        let span = tracing::info_span!("session", id);
+        tracing::Instrument::instrument(session::run(socket, state, id), span).await;
         ::metrics::gauge!("fovea_sessions_active").decrement(1.0);
         drop(permit);
         drop(token);
