@@ -59,8 +59,12 @@ enum Command {
         max_sessions: u64,
         /// Seconds a client may leave frames unacknowledged (or stop reading) before it is
         /// disconnected.
-        #[arg(long, default_value_t = 10.0)]
+        #[arg(long, default_value_t = 10.0, value_parser = cli::parse::parse_seconds)]
         stall_timeout_s: f64,
+        /// Seconds a new socket may take to say hello before it is closed (1008), so silent
+        /// sockets cannot hold session slots.
+        #[arg(long, default_value_t = 5.0, value_parser = cli::parse::parse_seconds)]
+        hello_timeout_s: f64,
     },
     /// Render one frame to an image file, without a server.
     ///
@@ -174,14 +178,14 @@ fn main() -> Result<()> {
             record_dir,
             max_sessions,
             stall_timeout_s,
+            hello_timeout_s,
         } => serve(
             addr,
             fovea::server::ServerOptions {
                 record_dir,
                 max_sessions: max_sessions as usize,
-                stall_timeout: std::time::Duration::from_secs_f64(
-                    stall_timeout_s.clamp(0.1, 3600.0),
-                ),
+                stall_timeout: std::time::Duration::from_secs_f64(stall_timeout_s),
+                hello_timeout: std::time::Duration::from_secs_f64(hello_timeout_s),
             },
         ),
         Command::Bench(args) => bench(args),

@@ -351,3 +351,37 @@ async fn frames_of_sessions_that_left_are_not_rendered() {
     frame_for(&mut live, 1).await;
     running.stop().await;
 }
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn silent_sockets_are_closed_by_the_hello_deadline_and_a_viewer_gets_in() {
+    use futures_util::StreamExt;
+    let (addr, running) = server(ServerOptions {
+        max_sessions: 2,
+        hello_timeout: Duration::from_millis(800),
+        ..Default::default()
+    })
+    .await;
+    let url = format!("ws://{addr}/ws");
+    // Two sockets that never say hello fill both slots…
+    let mut silent = Vec::new();
+    for _ in 0..2 {
+        silent.push(tokio_tungstenite::connect_async(&url).await.unwrap().0);
+    }
+    assert!(
+        http_get(addr, "/readyz").await.contains(" 503 "),
+        "both slots are held"
+    );
+    // …until the deadline closes them with 1008 and a reason.
+    for ws in &mut silent {
+        let msg = tokio::time::timeout(WAIT, ws.next()).await.unwrap();
+        let Some(Ok(tokio_tungstenite::tungstenite::Message::Close(Some(frame)))) = msg else {
+            panic!("expected a close frame, got {msg:?}");
+        };
+        assert_eq!(u16::from(frame.code), 1008);
+        assert!(frame.reason.contains("no hello"), "{}", frame.reason);
+    }
+    let mut viewer = Client::connect(&url).await.unwrap();
+    viewer.hello(&small()).await.unwrap();
+    frame_for(&mut viewer, 1).await;
+    running.stop().await;
+}

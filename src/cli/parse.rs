@@ -73,3 +73,12 @@ pub fn url_is_allowed(url: &str, allowed: &[String]) -> Result<String> {
 pub fn scene_names() -> clap::builder::PossibleValuesParser {
     clap::builder::PossibleValuesParser::new(fovea::scene::builtin_names())
 }
+
+/// A duration in seconds from a flag: finite and within 0.1 s … 1 h.
+pub fn parse_seconds(s: &str) -> Result<f64, String> {
+    let v: f64 = s.trim().parse().map_err(|e| format!("{s:?}: {e}"))?;
+    if !(0.1..=3600.0).contains(&v) {
+        return Err(format!("{s:?}: seconds must lie in [0.1, 3600]"));
+    }
+    Ok(v)
+}

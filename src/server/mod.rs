@@ -57,6 +57,9 @@ pub struct ServerState {
     pub max_sessions: usize,
     /// A client that neither acknowledges frames nor reads for this long is disconnected.
     pub stall_timeout: Duration,
+    /// A socket that has not said hello this long after opening is closed (1008), so silent
+    /// sockets cannot hold session slots.
+    pub hello_timeout: Duration,
 }
 
 /// How a server runs beyond its listener and renderer.
@@ -68,6 +71,8 @@ pub struct ServerOptions {
     pub max_sessions: usize,
     /// Disconnect a client with frames outstanding and no acknowledgement for this long.
     pub stall_timeout: Duration,
+    /// Close a socket that has not said hello this long after opening.
+    pub hello_timeout: Duration,
 }
 
 impl Default for ServerOptions {
@@ -76,6 +81,7 @@ impl Default for ServerOptions {
             record_dir: None,
             max_sessions: 16,
             stall_timeout: Duration::from_secs(10),
+            hello_timeout: Duration::from_secs(5),
         }
     }
 }
@@ -123,6 +129,7 @@ pub async fn run_with(
         slots: Arc::new(tokio::sync::Semaphore::new(options.max_sessions.max(1))),
         max_sessions: options.max_sessions.max(1),
         stall_timeout: options.stall_timeout,
+        hello_timeout: options.hello_timeout,
     });
     let _ = metrics::handle();
     let app = router(state.clone());

@@ -52,6 +52,7 @@ pub async fn run(socket: WebSocket, state: Arc<ServerState>, id: u64) {
     let mut s = Session::new(id, state.clone());
     let mut making: Option<Making> = None;
     let mut sent = 0u64;
+    let hello_by = tokio::time::Instant::now() + state.hello_timeout;
     let close = loop {
         if making.is_none() {
             if let Some(job) = s.next_job() {
@@ -70,6 +71,11 @@ pub async fn run(socket: WebSocket, state: Arc<ServerState>, id: u64) {
                 tracing::info!(session = id, "disconnecting a stalled client");
                 let secs = state.stall_timeout.as_secs();
                 break Some(close_frame(1008, format!("no frame acknowledged for {secs} s: disconnected")));
+            }
+            _ = tokio::time::sleep_until(hello_by), if s.hello.is_none() => {
+                tracing::info!(session = id, "closing a socket that never said hello");
+                let secs = state.hello_timeout.as_secs_f64();
+                break Some(close_frame(1008, format!("no hello within {secs} s")));
             }
             _ = conn.gone.cancelled() => break None,
             incoming = conn.incoming.recv() => match incoming {
