@@ -43,8 +43,7 @@ function ack(frame, dropped) {
 function resetSession() {
   if (state.pending) state.pending.bitmap.close();
   Object.assign(state, {
-    welcome: null, lastHeader: null, pending: null, framesShown: 0, stats: new Stats(),
-    waitingSince: performance.now(),
+    welcome: null, lastHeader: null, pending: null, framesShown: 0, stats: new Stats(), waitingSince: null,
   });
 }
 
@@ -60,6 +59,7 @@ export function connect() {
     old.close(1000, 'reconnecting');
   }
   resetSession();
+  state.waitingSince = performance.now(); // the first frame is awaited from here
   const [width, height] = controls.size.value.split('x').map(Number);
   canvas.width = width;
   canvas.height = height;
@@ -84,7 +84,6 @@ export function connect() {
     if (state.ws !== ws) return; // replaced on purpose
     state.ws = null;
     resetSession(); // the session is over: nothing of it may linger into the next
-    state.waitingSince = null;
     scheduleRetry(ev.code === 1013 ? 'server full' : `connection closed${ev.reason ? ` (${ev.reason})` : ''}`, ev.code === 1013);
   };
 }

@@ -4,7 +4,7 @@
 use plotters::coord::Shift;
 use plotters::prelude::*;
 
-use super::{colour, err, padded, Plot};
+use super::{colour, err, legend, padded, Plot};
 use crate::gaze::evaluate::HorizonError;
 
 pub struct GazePlot {
@@ -104,14 +104,7 @@ impl Plot for GazePlot {
                     .draw_series(predicted.into_iter().map(|p| Circle::new(p, 3, c.filled())))
                     .map_err(err)?;
             }
-            chart
-                .configure_series_labels()
-                .position(SeriesLabelPosition::UpperLeft)
-                .background_style(WHITE.mix(0.9))
-                .border_style(BLACK.mix(0.4))
-                .label_font(("sans-serif", 12))
-                .draw()
-                .map_err(err)?;
+            legend(&mut chart, SeriesLabelPosition::UpperLeft)?;
         }
         Ok(())
     }

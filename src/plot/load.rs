@@ -6,7 +6,7 @@ use plotters::coord::Shift;
 use plotters::prelude::*;
 use serde::Deserialize;
 
-use super::{colour, err, padded, Plot};
+use super::{colour, err, legend, padded, Plot};
 
 /// One run of `fovea load`, as its report (and `load.json`) records it.
 #[derive(Debug, Clone, PartialEq, Deserialize)]
@@ -114,20 +114,6 @@ fn mesh<'a, DB: DrawingBackend + 'a>(chart: &mut Chart<'a, DB>, y: &str) -> Resu
         .axis_desc_style(("sans-serif", 14))
         .label_style(("sans-serif", 12))
         .x_label_formatter(&|v| format!("{v:.0}"))
-        .draw()
-        .map_err(err)
-}
-
-fn legend<'a, DB: DrawingBackend + 'a>(
-    chart: &mut Chart<'a, DB>,
-    at: SeriesLabelPosition,
-) -> Result<(), String> {
-    chart
-        .configure_series_labels()
-        .position(at)
-        .background_style(WHITE.mix(0.9))
-        .border_style(BLACK.mix(0.4))
-        .label_font(("sans-serif", 12))
         .draw()
         .map_err(err)
 }

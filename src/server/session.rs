@@ -205,7 +205,7 @@ impl Session {
                 Err(e) => Some(knob_error(e)),
             },
             ClientMessage::Ack(ack) => match pacer.on_ack(ack.frame, now) {
-                Ok(()) if tracing::enabled!(tracing::Level::TRACE) => {
+                Ok(()) => {
                     tracing::trace!(
                         session = self.id,
                         frame = ack.frame,
@@ -214,7 +214,6 @@ impl Session {
                     );
                     None
                 }
-                Ok(()) => None,
                 Err(made) => Some(error(
                     ErrorCode::BadAck,
                     format!(

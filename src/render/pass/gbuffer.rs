@@ -74,14 +74,38 @@ fn pipeline(
     layout: &wgpu::BindGroupLayout,
     module: &wgpu::ShaderModule,
 ) -> wgpu::RenderPipeline {
+    let targets = [NORMAL_DISTANCE, ALBEDO, BLURRED_NORMAL, IRRADIANCE];
+    mesh_pipeline(
+        device,
+        PASS.label,
+        layout,
+        module,
+        &targets,
+        Some(wgpu::Face::Back),
+    )
+}
+
+/// A pipeline that rasterises the scene mesh (`vs_main`/`fs_main`, the mesh and radiosity
+/// vertex buffers, nearest depth wins) into `targets`: the G-buffer's and the photon pass's.
+pub fn mesh_pipeline(
+    device: &wgpu::Device,
+    label: &str,
+    layout: &wgpu::BindGroupLayout,
+    module: &wgpu::ShaderModule,
+    targets: &[wgpu::TextureFormat],
+    cull_mode: Option<wgpu::Face>,
+) -> wgpu::RenderPipeline {
     let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-        label: Some(PASS.label),
+        label: Some(label),
         bind_group_layouts: &[Some(layout)],
         immediate_size: 0,
     });
-    let target = |format: wgpu::TextureFormat| Some(wgpu::ColorTargetState::from(format));
+    let targets: Vec<_> = targets
+        .iter()
+        .map(|f| Some(wgpu::ColorTargetState::from(*f)))
+        .collect();
     device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-        label: Some(PASS.label),
+        label: Some(label),
         layout: Some(&pipeline_layout),
         vertex: wgpu::VertexState {
             module,
@@ -90,7 +114,7 @@ fn pipeline(
             buffers: &[Some(VERTEX_LAYOUT), Some(GI_LAYOUT)],
         },
         primitive: wgpu::PrimitiveState {
-            cull_mode: Some(wgpu::Face::Back),
+            cull_mode,
             ..Default::default()
         },
         depth_stencil: Some(wgpu::DepthStencilState {
@@ -105,12 +129,7 @@ fn pipeline(
             module,
             entry_point: Some("fs_main"),
             compilation_options: Default::default(),
-            targets: &[
-                target(NORMAL_DISTANCE),
-                target(ALBEDO),
-                target(BLURRED_NORMAL),
-                target(IRRADIANCE),
-            ],
+            targets: &targets,
         }),
         multiview_mask: None,
         cache: None,

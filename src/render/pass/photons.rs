@@ -5,7 +5,7 @@
 
 use glam::{Mat4, Vec3};
 
-use super::gbuffer::{MeshBuffers, GI_LAYOUT, IRRADIANCE, VERTEX_LAYOUT};
+use super::gbuffer::{mesh_pipeline, MeshBuffers, IRRADIANCE};
 use super::pyramid;
 use crate::render::gpu;
 use crate::render::graph::{read, uniform, GraphError, PassDecl, Pipelines, Resources, Routes};
@@ -77,47 +77,13 @@ pub struct PhotonInputs {
 fn raster_pipeline(device: &wgpu::Device, pipelines: &mut Pipelines) -> wgpu::RenderPipeline {
     let layout = pipelines.layout(&PASS);
     let module = pipelines.module(&PASS);
-    let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-        label: Some(PASS.label),
-        bind_group_layouts: &[Some(&layout)],
-        immediate_size: 0,
-    });
-    let target = |f: wgpu::TextureFormat| Some(wgpu::ColorTargetState::from(f));
-    device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-        label: Some(PASS.label),
-        layout: Some(&pipeline_layout),
-        vertex: wgpu::VertexState {
-            module: &module,
-            entry_point: Some("vs_main"),
-            compilation_options: Default::default(),
-            buffers: &[Some(VERTEX_LAYOUT), Some(GI_LAYOUT)],
-        },
-        // Both faces: the light may see an object's inside through an open mesh.
-        primitive: wgpu::PrimitiveState {
-            cull_mode: None,
-            ..Default::default()
-        },
-        depth_stencil: Some(wgpu::DepthStencilState {
-            format: wgpu::TextureFormat::Depth32Float,
-            depth_write_enabled: Some(true),
-            depth_compare: Some(wgpu::CompareFunction::Less),
-            stencil: Default::default(),
-            bias: Default::default(),
-        }),
-        multisample: Default::default(),
-        fragment: Some(wgpu::FragmentState {
-            module: &module,
-            entry_point: Some("fs_main"),
-            compilation_options: Default::default(),
-            targets: &[
-                target(wgpu::TextureFormat::Rgba32Float),
-                target(wgpu::TextureFormat::Rgba32Float),
-                target(IRRADIANCE),
-            ],
-        }),
-        multiview_mask: None,
-        cache: None,
-    })
+    let targets = [
+        wgpu::TextureFormat::Rgba32Float,
+        wgpu::TextureFormat::Rgba32Float,
+        IRRADIANCE,
+    ];
+    // Both faces: the light may see an object's inside through an open mesh.
+    mesh_pipeline(device, PASS.label, &layout, &module, &targets, None)
 }
 
 /// The photon and pyramid pipelines (shared by every scene).
