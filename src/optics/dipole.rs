@@ -50,6 +50,27 @@ pub fn fresnel_transmittance(eta: f64, cos_theta: f64) -> f64 {
     1.0 - 0.5 * (rs * rs + rp * rp)
 }
 
+/// The reduced albedo α' whose dipole reflects `rd` in total at index `eta` (the total
+/// depends on α' and η only), by bisection; `rd` is clamped to what α' ∈ [0, 0.9999] can give.
+/// Used to turn a colour (a glTF base colour) into scattering coefficients.
+pub fn albedo_for_total_reflectance(rd: f64, eta: f64) -> f64 {
+    let total = |a: f64| {
+        Dipole::new(a, 1.0 - a, eta)
+            .map(|d| d.total_reflectance())
+            .unwrap_or(0.0)
+    };
+    let (mut lo, mut hi) = (1e-4, 0.9999);
+    for _ in 0..60 {
+        let mid = 0.5 * (lo + hi);
+        if total(mid) < rd {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+    }
+    0.5 * (lo + hi)
+}
+
 /// The dipole's derived constants for one channel.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Dipole {
@@ -289,6 +310,20 @@ mod tests {
             Dipole::new(1.0, 0.1, 0.0),
             Err(DipoleError::Eta(_))
         ));
+    }
+
+    #[test]
+    fn a_colour_inverts_to_the_albedo_that_reflects_it() {
+        for rd in [0.05, 0.3, 0.6, 0.85] {
+            for eta in [1.0, 1.3, 1.5] {
+                let a = albedo_for_total_reflectance(rd, eta);
+                let back = Dipole::new(a, 1.0 - a, eta).unwrap().total_reflectance();
+                assert!(
+                    (back - rd).abs() < 1e-6,
+                    "rd {rd} η {eta}: α' {a} gives {back}"
+                );
+            }
+        }
     }
 
     #[test]

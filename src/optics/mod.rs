@@ -6,3 +6,4 @@ pub mod color;
 pub mod dipole;
 pub mod saliency;
 pub mod shading;
+pub mod specular;

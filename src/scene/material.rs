@@ -33,8 +33,11 @@ pub const JENSEN_ETA: f64 = 1.3;
 #[serde(tag = "kind", rename_all = "snake_case", deny_unknown_fields)]
 pub enum MaterialSpec {
     Opaque {
-        /// Linear diffuse reflectance, each channel in [0, 1].
+        /// Linear base colour, each channel in [0, 1]: the diffuse reflectance of a
+        /// dielectric, the specular colour of a metal.
         albedo: [f64; 3],
+        #[serde(flatten)]
+        surface: SurfaceSpec,
     },
     Translucent {
         /// A name from `JENSEN_2001`; explicit coefficients below override it.
@@ -49,6 +52,8 @@ pub enum MaterialSpec {
         /// Relative index of refraction η (default 1.3).
         #[serde(default, skip_serializing_if = "Option::is_none")]
         eta: Option<f64>,
+        #[serde(flatten)]
+        surface: SurfaceSpec,
     },
     /// An area light: a surface that emits diffusely and reflects nothing.
     Emitter {
@@ -58,17 +63,77 @@ pub enum MaterialSpec {
     },
 }
 
+/// The interface of a surface: its microfacet roughness, how metallic it is, whether both
+/// faces show. Omitted fields take the defaults below.
+#[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SurfaceSpec {
+    /// Perceptual roughness r in [0, 1] (GGX α = r²); default 0.5 (0.3 for translucent).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub roughness: Option<f64>,
+    /// 0 dielectric … 1 metal; default 0. Translucent materials are dielectric.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub metallic: Option<f64>,
+    /// Index of refraction of an opaque dielectric's coating, for its F0 (default 1.5).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub ior: Option<f64>,
+    /// Shade back faces too (open meshes, leaves); default false (back faces are culled).
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub double_sided: bool,
+}
+
+/// A validated surface (see `SurfaceSpec`).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Surface {
+    pub roughness: f64,
+    pub metallic: f64,
+    /// Normal-incidence specular reflectance per channel (Schlick's F0).
+    pub f0: [f64; 3],
+    pub double_sided: bool,
+}
+
+impl SurfaceSpec {
+    fn validate(
+        &self,
+        default_roughness: f64,
+        base: [f64; 3],
+        eta: Option<f64>,
+    ) -> Result<Surface, String> {
+        let roughness = self.roughness.unwrap_or(default_roughness);
+        let metallic = self.metallic.unwrap_or(0.0);
+        if !(0.0..=1.0).contains(&roughness) || !(0.0..=1.0).contains(&metallic) {
+            return Err(format!(
+                "roughness {roughness} and metallic {metallic} must lie in [0, 1]"
+            ));
+        }
+        let ior = eta.or(self.ior).unwrap_or(1.5);
+        if !(1.0..=3.0).contains(&ior) {
+            return Err(format!("ior {ior} must lie in [1, 3]"));
+        }
+        let dielectric = crate::optics::specular::f0_of_ior(ior);
+        let f0 = [0, 1, 2].map(|c| dielectric + (base[c] - dielectric) * metallic);
+        Ok(Surface {
+            roughness,
+            metallic,
+            f0,
+            double_sided: self.double_sided,
+        })
+    }
+}
+
 /// A validated material, ready for shading.
 #[derive(Debug, Clone, PartialEq)]
 pub enum Material {
     Opaque {
         albedo: [f64; 3],
+        surface: Surface,
     },
     Translucent {
         sigma_s_prime: [f64; 3],
         sigma_a: [f64; 3],
         eta: f64,
         dipole: [Dipole; 3],
+        surface: Surface,
     },
     Emitter {
         emission: [f64; 3],
@@ -78,11 +143,14 @@ pub enum Material {
 impl Material {
     pub fn from_spec(spec: &MaterialSpec) -> Result<Material, String> {
         match spec {
-            MaterialSpec::Opaque { albedo } => {
+            MaterialSpec::Opaque { albedo, surface } => {
                 if albedo.iter().any(|a| !(0.0..=1.0).contains(a)) {
                     return Err(format!("albedo {albedo:?} must lie in [0, 1]"));
                 }
-                Ok(Material::Opaque { albedo: *albedo })
+                Ok(Material::Opaque {
+                    albedo: *albedo,
+                    surface: surface.validate(0.5, *albedo, None)?,
+                })
             }
             MaterialSpec::Emitter { emission } => {
                 if emission.iter().any(|e| !(e.is_finite() && *e >= 0.0)) {
@@ -97,7 +165,11 @@ impl Material {
                 sigma_s_prime,
                 sigma_a,
                 eta,
+                surface,
             } => {
+                if surface.metallic.is_some_and(|m| m != 0.0) {
+                    return Err("a translucent material cannot be metallic".into());
+                }
                 let base = match preset {
                     Some(name) => {
                         let (_, s, a) =
@@ -123,6 +195,7 @@ impl Material {
                     .or(base.map(|b| b.1))
                     .ok_or("a translucent material needs a preset or sigma_a")?;
                 let eta = eta.unwrap_or(JENSEN_ETA);
+                let surface = surface.validate(0.3, [0.0; 3], Some(eta))?;
                 let mut dipole = Vec::with_capacity(3);
                 for c in 0..3 {
                     dipole.push(Dipole::new(s[c], a[c], eta).map_err(|e: DipoleError| {
@@ -134,6 +207,7 @@ impl Material {
                     sigma_a: a,
                     eta,
                     dipole: [dipole[0], dipole[1], dipole[2]],
+                    surface,
                 })
             }
         }
@@ -147,9 +221,19 @@ impl Material {
     /// the dipole's total diffuse reflectance (what every cheaper rung shades with).
     pub fn albedo(&self) -> [f64; 3] {
         match self {
-            Material::Opaque { albedo } => *albedo,
+            Material::Opaque { albedo, .. } => *albedo,
             Material::Translucent { dipole, .. } => dipole.map(|d| d.total_reflectance()),
             Material::Emitter { .. } => [0.0; 3],
+        }
+    }
+
+    /// The surface's interface; `None` for emitters, which reflect nothing.
+    pub fn surface(&self) -> Option<&Surface> {
+        match self {
+            Material::Opaque { surface, .. } | Material::Translucent { surface, .. } => {
+                Some(surface)
+            }
+            Material::Emitter { .. } => None,
         }
     }
 
@@ -186,6 +270,7 @@ mod tests {
                 sigma_s_prime: None,
                 sigma_a: None,
                 eta: None,
+                surface: Default::default(),
             };
             let m = Material::from_spec(&spec).unwrap();
             for rd in m.albedo() {
@@ -203,6 +288,7 @@ mod tests {
                 sigma_s_prime: None,
                 sigma_a: None,
                 eta: None,
+                surface: Default::default(),
             })
             .unwrap()
         };
@@ -226,6 +312,7 @@ mod tests {
                 sigma_s_prime: Some(s),
                 sigma_a: Some(a),
                 eta: None,
+                surface: Default::default(),
             })
         };
         assert!(t([0.0; 3], [0.0; 3])
@@ -239,6 +326,7 @@ mod tests {
             sigma_s_prime: None,
             sigma_a: None,
             eta: None,
+            surface: Default::default(),
         };
         assert!(Material::from_spec(&unknown)
             .unwrap_err()

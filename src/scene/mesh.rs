@@ -10,6 +10,9 @@ pub struct Mesh {
     pub blurred_normals: Vec<Vec3>,
     /// Material id of each vertex.
     pub material: Vec<u32>,
+    /// Linear RGBA multiplying the material's base colour per vertex (glTF vertex colours and
+    /// base colour textures sampled at the vertices); white elsewhere.
+    pub tint: Vec<[f32; 4]>,
     pub indices: Vec<u32>,
 }
 
@@ -31,12 +34,18 @@ impl Mesh {
             .into_iter()
             .map(|n| n.try_normalize().unwrap_or(Vec3::Y))
             .collect();
+        Mesh::with_normals(positions, normals, indices)
+    }
+
+    /// A mesh whose normals are given (unit length, one per position).
+    pub fn with_normals(positions: Vec<Vec3>, normals: Vec<Vec3>, indices: Vec<u32>) -> Mesh {
         let n = positions.len();
         Mesh {
             positions,
             blurred_normals: normals.clone(),
             normals,
             material: vec![0; n],
+            tint: vec![[1.0; 4]; n],
             indices,
         }
     }
@@ -80,6 +89,7 @@ impl Mesh {
         self.positions.extend(other.positions);
         self.normals.extend(other.normals);
         self.blurred_normals.extend(other.blurred_normals);
+        self.tint.extend(other.tint);
     }
 
     pub fn triangle_count(&self) -> u32 {
@@ -91,6 +101,22 @@ impl Mesh {
             (Vec3::splat(f32::MAX), Vec3::splat(f32::MIN)),
             |(lo, hi), &p| (lo.min(p), hi.max(p)),
         )
+    }
+}
+
+/// Triangulates the polygon `corners` as a fan into `out`, leaving out triangles that repeat a
+/// corner or have no area (they would only make NaN normals and nothing visible).
+pub fn push_fan(corners: &[u32], positions: &[Vec3], out: &mut Vec<u32>) {
+    for k in 1..corners.len().saturating_sub(1) {
+        let t = [corners[0], corners[k], corners[k + 1]];
+        if t[0] == t[1] || t[1] == t[2] || t[0] == t[2] {
+            continue;
+        }
+        let [a, b, c] = t.map(|i| positions[i as usize]);
+        let area = (b - a).cross(c - a).length();
+        if area > 0.0 && area.is_finite() {
+            out.extend_from_slice(&t);
+        }
     }
 }
 

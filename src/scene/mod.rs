@@ -1,23 +1,34 @@
-//! Scenes: a JSON description (camera, one directional light, materials, objects placing
-//! meshes), loaded and validated into one combined mesh with a material per vertex. The
-//! built-in scenes are embedded in the binary so `fovea` runs from any directory.
-//! Format: `docs/scenes.md`.
+//! Scenes: a JSON description (camera, key light and more lights, materials, objects placing
+//! meshes and glTF files), loaded and validated into one combined mesh with a material per
+//! vertex. The built-in scenes are embedded in the binary so `fovea` runs from any directory;
+//! scenes of one's own are read from folders (`Catalog`). Format: `docs/scenes.md`.
 
+mod build;
 mod camera;
+mod catalog;
 mod file;
+mod folder;
+mod gltf;
+pub mod limits;
 pub mod material;
 mod mesh;
+mod model;
+mod obj;
 pub mod plan;
 mod ply;
 
+pub use build::MAX_MATERIALS;
 pub use camera::Camera;
-pub use file::{Light, ObjectSpec, RadiosityMode, RadiositySpec, SceneFile};
+pub use catalog::{Catalog, CatalogEntry};
+pub use file::{Light, LightSpec, ObjectSpec, RadiosityMode, RadiositySpec, SceneFile, MAX_LIGHTS};
+pub use folder::{Folder, FolderError};
 pub use material::{Material, MaterialSpec};
 pub use mesh::Mesh;
+pub use obj::{parse_obj, ObjError};
 pub use plan::Plan;
-pub use ply::{parse_ply, PlyError, PlyMesh};
+pub use ply::{parse_ply, PlyError, RawMesh};
 
-use glam::{Mat4, Quat, Vec3};
+use glam::Vec3;
 
 /// The scene a session gets when `hello` names none.
 pub const DEFAULT_SCENE: &str = "bunny-marble";
@@ -56,12 +67,14 @@ pub enum SceneError {
         scene: String,
         source: serde_json::Error,
     },
-    #[error("scene {scene:?}: mesh {mesh:?}: {source}")]
-    Mesh {
+    #[error("scene {scene:?}: mesh {mesh:?}: {message}")]
+    MeshFile {
         scene: String,
         mesh: String,
-        source: PlyError,
+        message: String,
     },
+    #[error("{path}: {message}")]
+    File { path: String, message: String },
     #[error("scene {scene:?}: {message}")]
     Invalid { scene: String, message: String },
 }
@@ -87,27 +100,15 @@ pub struct Scene {
     pub mesh: Mesh,
     /// Materials by id (the order of `file.materials`), with their names.
     pub materials: Vec<(String, Material)>,
-    /// One per object, in file order.
+    /// One per object (a glTF object: one per primitive), in file order.
     pub placed: Vec<Placed>,
+    /// What loading left out or repaired (ignored extensions, dropped triangles, …).
+    pub notes: Vec<String>,
 }
 
 /// The built-in scenes' names, default first.
 pub fn builtin_names() -> Vec<&'static str> {
     BUILTIN_SCENES.iter().map(|(n, _)| *n).collect()
-}
-
-/// A unit square in XZ centred on the origin, facing +Y (two counter-clockwise triangles).
-fn plane() -> PlyMesh {
-    let positions = vec![
-        Vec3::new(-0.5, 0.0, -0.5),
-        Vec3::new(-0.5, 0.0, 0.5),
-        Vec3::new(0.5, 0.0, 0.5),
-        Vec3::new(0.5, 0.0, -0.5),
-    ];
-    PlyMesh {
-        positions,
-        indices: vec![0, 1, 2, 0, 2, 3],
-    }
 }
 
 impl Scene {
@@ -119,145 +120,40 @@ impl Scene {
         Scene::from_json(json)
     }
 
+    /// A scene file given as text: its meshes must be built in.
     pub fn from_json(json: &str) -> Result<Scene, SceneError> {
-        let mut file: SceneFile =
-            serde_json::from_str(json).map_err(|source| SceneError::Json {
-                scene: "<json>".into(),
-                source,
-            })?;
-        let scene = file.name.clone();
-        let invalid = |message: String| SceneError::Invalid {
-            scene: scene.clone(),
+        build::build(json, None)
+    }
+
+    /// A scene file (`.json`) or a model (`.gltf`, `.glb`, `.ply`, `.obj`, lit and framed by
+    /// default where it says nothing) on disk; everything it refers to must lie in `folder`.
+    pub fn load(path: &std::path::Path, folder: &Folder) -> Result<Scene, SceneError> {
+        let file_err = |message: String| SceneError::File {
+            path: path.display().to_string(),
             message,
         };
-        file.camera.validate().map_err(invalid)?;
-        if !(0.0..=1.0).contains(&file.ambient) {
-            return Err(invalid(format!(
-                "ambient {} must lie in [0, 1]",
-                file.ambient
-            )));
-        }
-        if !(file.mm_per_unit.is_finite() && file.mm_per_unit > 0.0) {
-            return Err(invalid(format!(
-                "mm_per_unit {} must be finite and > 0",
-                file.mm_per_unit
-            )));
-        }
-        let to_light = Vec3::from(file.light.to_light)
-            .try_normalize()
-            .ok_or_else(|| invalid("light.to_light must be a non-zero finite vector".into()))?;
-        file.light.to_light = to_light.into();
-        let light_ok = file.light.color.iter().all(|c| c.is_finite() && *c >= 0.0)
-            && file.light.intensity.is_finite()
-            && file.light.intensity >= 0.0
-            && file.light.orbit_deg_per_s.is_finite();
-        if !light_ok {
-            return Err(invalid(
-                "light colour and intensity must be finite and ≥ 0".into(),
-            ));
-        }
-        let mut materials = Vec::new();
-        for (name, spec) in &file.materials {
-            let m = Material::from_spec(spec)
-                .map_err(|e| invalid(format!("material {name:?}: {e}")))?;
-            materials.push((name.clone(), m));
-        }
-        if file.objects.is_empty() {
-            return Err(invalid("a scene needs at least one object".into()));
-        }
-        if let Some(r) = &file.radiosity {
-            if !(r.patch_size.is_finite() && r.patch_size > 0.0)
-                || r.max_depth > 6
-                || !(r.stop_fraction > 0.0 && r.stop_fraction < 1.0)
-            {
-                return Err(invalid(
-                    "radiosity: patch_size must be > 0, max_depth ≤ 6 and stop_fraction in (0, 1)"
-                        .into(),
-                ));
-            }
-        }
-        let mut mesh = Mesh::default();
-        let mut placed = Vec::new();
-        for (i, object) in file.objects.iter().enumerate() {
-            let material = materials
-                .iter()
-                .position(|(n, _)| *n == object.material)
-                .ok_or_else(|| {
-                    invalid(format!(
-                        "object {i} uses material {:?}, which the scene does not define",
-                        object.material
-                    ))
-                })?;
-            let mut quad = None;
-            let ply = match object.mesh.as_str() {
-                "plane" => plane(),
-                "quad" => {
-                    let corners = object.corners.map(|c| c.map(Vec3::from)).ok_or_else(|| {
-                        invalid(format!("object {i}: a quad needs its four corners"))
-                    })?;
-                    let (cells, depth) = quad_lattice(&corners, file.radiosity.as_ref())
-                        .ok_or_else(|| {
-                            invalid(format!(
-                                "object {i}: quad corners must be finite and form a parallelogram"
-                            ))
-                        })?;
-                    quad = Some((corners, cells, depth));
-                    lattice_mesh(&corners, crate::radiosity::lattice(cells, depth))
+        let real = folder
+            .resolve(folder.root(), &path.to_string_lossy())
+            .or_else(|_| {
+                // An absolute path (from the command line) is fine when it is in the folder.
+                let real = path.canonicalize().map_err(|e| file_err(e.to_string()))?;
+                if real.starts_with(folder.root()) {
+                    Ok(real)
+                } else {
+                    Err(file_err(format!("not inside {}", folder.root().display())))
                 }
-                name => {
-                    let (_, bytes) =
-                        BUILTIN_MESHES
-                            .iter()
-                            .find(|(n, _)| *n == name)
-                            .ok_or_else(|| SceneError::UnknownMesh {
-                                scene: scene.clone(),
-                                mesh: name.to_string(),
-                            })?;
-                    parse_ply(bytes).map_err(|source| SceneError::Mesh {
-                        scene: scene.clone(),
-                        mesh: name.to_string(),
-                        source,
-                    })?
-                }
-            };
-            if !(object.scale.is_finite() && object.scale > 0.0)
-                || !Vec3::from(object.translate).is_finite()
-                || !object.rotate_y_deg.is_finite()
-            {
-                return Err(invalid(format!(
-                    "object {i}: scale must be > 0 and the transform finite"
-                )));
-            }
-            let transform = Mat4::from_scale_rotation_translation(
-                Vec3::splat(object.scale),
-                Quat::from_rotation_y(object.rotate_y_deg.to_radians()),
-                Vec3::from(object.translate),
-            );
-            let positions: Vec<Vec3> = ply
-                .positions
-                .iter()
-                .map(|p| transform.transform_point3(*p))
-                .collect();
-            let part = Mesh::with_smooth_normals(positions, ply.indices);
-            // The cheap translucency rung shades with normals blurred over the light's reach.
-            let reach_units = (materials[material].1.reach_mm() / file.mm_per_unit) as f32;
-            placed.push(Placed {
-                material: material as u32,
-                first_vertex: mesh.positions.len() as u32,
-                vertex_count: part.positions.len() as u32,
-                first_index: mesh.indices.len() as u32,
-                index_count: part.indices.len() as u32,
-                quad: quad
-                    .map(|(c, cells, d)| (c.map(|p| transform.transform_point3(p)), cells, d)),
-            });
-            mesh.append(part.with_blurred_normals(reach_units), material as u32);
+            })?;
+        let base = real.parent().unwrap_or(folder.root()).to_path_buf();
+        let is_json = real
+            .extension()
+            .is_some_and(|e| e.eq_ignore_ascii_case("json"));
+        if is_json {
+            let bytes = limits::read_limited(&real).map_err(|e| file_err(e.to_string()))?;
+            let json = String::from_utf8(bytes).map_err(|_| file_err("not UTF-8 text".into()))?;
+            build::build(&json, Some((folder, &base)))
+        } else {
+            model::scene_of_model(&real, folder)
         }
-        Ok(Scene {
-            file,
-            mesh,
-            materials,
-            placed,
-        })
     }
 
     pub fn name(&self) -> &str {
@@ -319,47 +215,6 @@ impl Scene {
             })
             .collect()
     }
-}
-
-/// Patches per side and subdivision depth for a quad: patches no larger than the scene's
-/// `radiosity.patch_size` (one patch without radiosity settings). `None` if not a parallelogram.
-fn quad_lattice(c: &[Vec3; 4], spec: Option<&RadiositySpec>) -> Option<([u32; 2], u32)> {
-    let (u, v) = (c[1] - c[0], c[3] - c[0]);
-    let closes = (c[0] + u + v - c[2]).length() <= 1e-4 * (u.length() + v.length());
-    if !(c.iter().all(|p| p.is_finite()) && closes && u.cross(v).length() > 0.0) {
-        return None;
-    }
-    Some(match spec {
-        Some(r) if r.mode != RadiosityMode::Off => {
-            let n = |len: f32| ((len / r.patch_size).ceil() as u32).clamp(1, 64);
-            ([n(u.length()), n(v.length())], r.max_depth)
-        }
-        _ => ([1, 1], 0),
-    })
-}
-
-/// A parallelogram as a grid of `lattice[0] × lattice[1]` cells, row by row from corner 0
-/// (the order the radiosity solver writes its per-vertex output in).
-fn lattice_mesh(c: &[Vec3; 4], lattice: [u32; 2]) -> PlyMesh {
-    let [lu, lv] = lattice;
-    let mut positions = Vec::with_capacity(((lu + 1) * (lv + 1)) as usize);
-    for j in 0..=lv {
-        for i in 0..=lu {
-            positions.push(
-                c[0] + (c[1] - c[0]) * (i as f32 / lu as f32)
-                    + (c[3] - c[0]) * (j as f32 / lv as f32),
-            );
-        }
-    }
-    let mut indices = Vec::with_capacity((lu * lv * 6) as usize);
-    let at = |i: u32, j: u32| j * (lu + 1) + i;
-    for j in 0..lv {
-        for i in 0..lu {
-            indices.extend([at(i, j), at(i + 1, j), at(i + 1, j + 1)]);
-            indices.extend([at(i, j), at(i + 1, j + 1), at(i, j + 1)]);
-        }
-    }
-    PlyMesh { positions, indices }
 }
 
 #[cfg(test)]

@@ -1,7 +1,11 @@
-//! Binary little-endian PLY reader: enough of the format for scanned meshes (any vertex
-//! properties, polygon faces triangulated as fans), with errors that name what is wrong.
+//! PLY reader (ASCII and binary, either byte order): enough of the format for scanned meshes
+//! (any vertex properties, polygon faces triangulated as fans), with errors that name what is
+//! wrong. Counts are checked against `limits` and against the bytes left before anything is
+//! allocated; faces with repeated corners or zero area are dropped and counted.
 
 use glam::Vec3;
+
+use super::limits::{MAX_POLYGON_CORNERS, MAX_TRIANGLES, MAX_VERTICES};
 
 #[derive(Debug, thiserror::Error, PartialEq)]
 pub enum PlyError {
@@ -9,7 +13,7 @@ pub enum PlyError {
     NotPly,
     #[error("PLY header is not terminated by `end_header`")]
     NoEndHeader,
-    #[error("PLY format {0:?} is not supported; convert to binary_little_endian 1.0")]
+    #[error("PLY format {0:?} is not supported (ascii, binary_little_endian, binary_big_endian)")]
     Format(String),
     #[error("PLY header line {line}: {message}")]
     Header { line: usize, message: String },
@@ -19,13 +23,21 @@ pub enum PlyError {
     NoFaces,
     #[error("PLY data ends early while reading {0}")]
     Truncated(&'static str),
+    #[error("PLY value {token:?} in {what} is not a number")]
+    BadNumber { what: &'static str, token: String },
+    #[error("PLY declares {count} {what}; the limit is {limit}")]
+    TooMany {
+        what: &'static str,
+        count: usize,
+        limit: usize,
+    },
     #[error("face {face} refers to vertex {index}, but there are only {count} vertices")]
     IndexOutOfRange {
         face: usize,
         index: i64,
         count: usize,
     },
-    #[error("face {face} has {count} corners; a face needs at least 3")]
+    #[error("face {face} has {count} corners; a face needs 3 to {MAX_POLYGON_CORNERS}")]
     DegenerateFace { face: usize, count: usize },
     #[error("vertex {0} has a non-finite coordinate")]
     NonFinite(usize),
@@ -67,16 +79,22 @@ impl Scalar {
         }
     }
 
-    fn read(self, b: &[u8]) -> f64 {
+    /// Decodes `b` (exactly `size()` bytes) stored little- or big-endian.
+    fn read(self, b: &[u8], big: bool) -> f64 {
+        let mut a = [0u8; 8];
+        a[..b.len()].copy_from_slice(b);
+        if big {
+            a[..b.len()].reverse();
+        }
         match self {
-            Scalar::I8 => f64::from(b[0] as i8),
-            Scalar::U8 => f64::from(b[0]),
-            Scalar::I16 => f64::from(i16::from_le_bytes([b[0], b[1]])),
-            Scalar::U16 => f64::from(u16::from_le_bytes([b[0], b[1]])),
-            Scalar::I32 => f64::from(i32::from_le_bytes([b[0], b[1], b[2], b[3]])),
-            Scalar::U32 => f64::from(u32::from_le_bytes([b[0], b[1], b[2], b[3]])),
-            Scalar::F32 => f64::from(f32::from_le_bytes([b[0], b[1], b[2], b[3]])),
-            Scalar::F64 => f64::from_le_bytes([b[0], b[1], b[2], b[3], b[4], b[5], b[6], b[7]]),
+            Scalar::I8 => f64::from(a[0] as i8),
+            Scalar::U8 => f64::from(a[0]),
+            Scalar::I16 => f64::from(i16::from_le_bytes([a[0], a[1]])),
+            Scalar::U16 => f64::from(u16::from_le_bytes([a[0], a[1]])),
+            Scalar::I32 => f64::from(i32::from_le_bytes([a[0], a[1], a[2], a[3]])),
+            Scalar::U32 => f64::from(u32::from_le_bytes([a[0], a[1], a[2], a[3]])),
+            Scalar::F32 => f64::from(f32::from_le_bytes([a[0], a[1], a[2], a[3]])),
+            Scalar::F64 => f64::from_le_bytes(a),
         }
     }
 }
@@ -101,63 +119,137 @@ struct Element {
     properties: Vec<Property>,
 }
 
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum Encoding {
+    Ascii,
+    Binary { big: bool },
+}
+
 /// Triangles and positions as stored in the file, before normals are computed.
-#[derive(Debug, Clone, PartialEq)]
-pub struct PlyMesh {
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct RawMesh {
     pub positions: Vec<Vec3>,
     pub indices: Vec<u32>,
+    /// Faces dropped because two corners coincide or the triangle has no area.
+    pub dropped_degenerate: usize,
 }
 
-struct Cursor<'a> {
+/// The body after the header: binary values of one byte order, or whitespace-separated text.
+struct Values<'a> {
     data: &'a [u8],
     at: usize,
+    encoding: Encoding,
 }
 
-impl<'a> Cursor<'a> {
-    fn take(&mut self, n: usize, what: &'static str) -> Result<&'a [u8], PlyError> {
-        let end = self.at.checked_add(n).filter(|&e| e <= self.data.len());
-        let end = end.ok_or(PlyError::Truncated(what))?;
-        let s = &self.data[self.at..end];
-        self.at = end;
-        Ok(s)
-    }
-
-    fn scalar(&mut self, ty: Scalar, what: &'static str) -> Result<f64, PlyError> {
-        Ok(ty.read(self.take(ty.size(), what)?))
-    }
-}
-
-pub fn parse_ply(bytes: &[u8]) -> Result<PlyMesh, PlyError> {
-    let (elements, body) = parse_header(bytes)?;
-    let mut cur = Cursor { data: body, at: 0 };
-    let mut positions = Vec::new();
-    let mut indices = Vec::new();
-    let mut saw_faces = false;
-    for el in &elements {
-        match el.name.as_str() {
-            "vertex" => positions = read_vertices(&mut cur, el)?,
-            "face" => {
-                saw_faces = true;
-                indices = read_faces(&mut cur, el, positions.len())?;
+impl<'a> Values<'a> {
+    fn next(&mut self, ty: Scalar, what: &'static str) -> Result<f64, PlyError> {
+        match self.encoding {
+            Encoding::Binary { big } => {
+                let end = self
+                    .at
+                    .checked_add(ty.size())
+                    .filter(|&e| e <= self.data.len());
+                let end = end.ok_or(PlyError::Truncated(what))?;
+                let v = ty.read(&self.data[self.at..end], big);
+                self.at = end;
+                Ok(v)
             }
-            _ => skip_element(&mut cur, el)?,
+            Encoding::Ascii => {
+                let rest = &self.data[self.at..];
+                let start = rest
+                    .iter()
+                    .position(|b| !b.is_ascii_whitespace())
+                    .ok_or(PlyError::Truncated(what))?;
+                let len = rest[start..]
+                    .iter()
+                    .position(|b| b.is_ascii_whitespace())
+                    .unwrap_or(rest.len() - start);
+                let token = &rest[start..start + len];
+                self.at += start + len;
+                let text = std::str::from_utf8(token).unwrap_or("");
+                text.parse::<f64>().map_err(|_| PlyError::BadNumber {
+                    what,
+                    token: String::from_utf8_lossy(token).into_owned(),
+                })
+            }
         }
     }
-    if positions.is_empty() {
+
+    /// Bytes (binary) or characters (ASCII) left: an upper bound on the values still to come.
+    fn left(&self) -> usize {
+        self.data.len() - self.at
+    }
+
+    /// The fewest bytes one record of `el` takes: a declared count larger than the bytes left
+    /// divided by this is a lie, refused before allocating for it.
+    fn min_record(&self, el: &Element) -> usize {
+        let per = |ty: Scalar| match self.encoding {
+            Encoding::Ascii => 2, // one digit and a separator
+            Encoding::Binary { .. } => ty.size(),
+        };
+        el.properties
+            .iter()
+            .map(|p| match p {
+                Property::Scalar { ty, .. } => per(*ty),
+                Property::List { count, .. } => per(*count),
+            })
+            .sum::<usize>()
+            .max(1)
+    }
+}
+
+pub fn parse_ply(bytes: &[u8]) -> Result<RawMesh, PlyError> {
+    let (elements, encoding, body) = parse_header(bytes)?;
+    let mut values = Values {
+        data: body,
+        at: 0,
+        encoding,
+    };
+    let mut mesh = RawMesh::default();
+    let mut saw_faces = false;
+    for el in &elements {
+        let fits = el.count.saturating_mul(values.min_record(el)) <= values.left();
+        let (what, limit) = match el.name.as_str() {
+            "vertex" => ("vertices", MAX_VERTICES),
+            "face" => ("faces", MAX_TRIANGLES),
+            _ => ("records", usize::MAX),
+        };
+        if el.count > limit {
+            return Err(PlyError::TooMany {
+                what,
+                count: el.count,
+                limit,
+            });
+        }
+        if !fits {
+            return Err(PlyError::Truncated(what));
+        }
+        match el.name.as_str() {
+            "vertex" => mesh.positions = read_vertices(&mut values, el)?,
+            "face" => {
+                saw_faces = true;
+                read_faces(&mut values, el, &mut mesh)?;
+            }
+            _ => skip_element(&mut values, el)?,
+        }
+    }
+    if mesh.positions.is_empty() {
         return Err(PlyError::NoPositions);
     }
     if !saw_faces {
         return Err(PlyError::NoFaces);
     }
-    Ok(PlyMesh { positions, indices })
+    Ok(mesh)
 }
 
-fn parse_header(bytes: &[u8]) -> Result<(Vec<Element>, &[u8]), PlyError> {
+fn parse_header(bytes: &[u8]) -> Result<(Vec<Element>, Encoding, &[u8]), PlyError> {
     const END: &[u8] = b"end_header";
     if !bytes.starts_with(b"ply") {
         return Err(PlyError::NotPly);
     }
-    let end = bytes
+    // The header is text and short; a missing end within 64 KB means this is not one.
+    let window = &bytes[..bytes.len().min(1 << 16)];
+    let end = window
         .windows(END.len())
         .position(|w| w == END)
         .ok_or(PlyError::NoEndHeader)?;
@@ -170,6 +262,7 @@ fn parse_header(bytes: &[u8]) -> Result<(Vec<Element>, &[u8]), PlyError> {
     }
     let text = String::from_utf8_lossy(&bytes[..end]);
     let mut elements: Vec<Element> = Vec::new();
+    let mut encoding = None;
     for (i, line) in text.lines().enumerate() {
         let line_no = i + 1;
         let bad = |message: String| PlyError::Header {
@@ -181,9 +274,12 @@ fn parse_header(bytes: &[u8]) -> Result<(Vec<Element>, &[u8]), PlyError> {
             ["ply"] | [] => {}
             ["comment", ..] | ["obj_info", ..] => {}
             ["format", fmt, _version] => {
-                if *fmt != "binary_little_endian" {
-                    return Err(PlyError::Format((*fmt).to_string()));
-                }
+                encoding = Some(match *fmt {
+                    "ascii" => Encoding::Ascii,
+                    "binary_little_endian" => Encoding::Binary { big: false },
+                    "binary_big_endian" => Encoding::Binary { big: true },
+                    other => return Err(PlyError::Format(other.to_string())),
+                });
             }
             ["element", name, count] => {
                 let count = count
@@ -222,10 +318,20 @@ fn parse_header(bytes: &[u8]) -> Result<(Vec<Element>, &[u8]), PlyError> {
             _ => return Err(bad(format!("cannot read {line:?}"))),
         }
     }
-    Ok((elements, &bytes[body_start..]))
+    let encoding = encoding.ok_or_else(|| PlyError::Format("(no format line)".into()))?;
+    Ok((elements, encoding, &bytes[body_start..]))
 }
 
-fn read_vertices(cur: &mut Cursor, el: &Element) -> Result<Vec<Vec3>, PlyError> {
+/// A list's length, refused when negative, absurd or longer than the data left.
+fn list_len(values: &mut Values, count: Scalar, what: &'static str) -> Result<usize, PlyError> {
+    let n = values.next(count, what)?;
+    if !(n >= 0.0 && n <= values.left() as f64) {
+        return Err(PlyError::Truncated(what));
+    }
+    Ok(n as usize)
+}
+
+fn read_vertices(values: &mut Values, el: &Element) -> Result<Vec<Vec3>, PlyError> {
     let slot = |axis: &str| {
         el.properties
             .iter()
@@ -235,19 +341,20 @@ fn read_vertices(cur: &mut Cursor, el: &Element) -> Result<Vec<Vec3>, PlyError> 
         return Err(PlyError::NoPositions);
     };
     let mut out = Vec::with_capacity(el.count);
-    let mut values = vec![0.0f64; el.properties.len()];
+    let mut row = vec![0.0f64; el.properties.len()];
     for v in 0..el.count {
         for (k, p) in el.properties.iter().enumerate() {
-            values[k] = match p {
-                Property::Scalar { ty, .. } => cur.scalar(*ty, "vertices")?,
+            row[k] = match p {
+                Property::Scalar { ty, .. } => values.next(*ty, "vertices")?,
                 Property::List { count, item, .. } => {
-                    let n = cur.scalar(*count, "vertices")? as usize;
-                    cur.take(n * item.size(), "vertices")?;
+                    for _ in 0..list_len(values, *count, "vertices")? {
+                        values.next(*item, "vertices")?;
+                    }
                     0.0
                 }
             };
         }
-        let p = Vec3::new(values[xi] as f32, values[yi] as f32, values[zi] as f32);
+        let p = Vec3::new(row[xi] as f32, row[yi] as f32, row[zi] as f32);
         if !p.is_finite() {
             return Err(PlyError::NonFinite(v));
         }
@@ -256,7 +363,7 @@ fn read_vertices(cur: &mut Cursor, el: &Element) -> Result<Vec<Vec3>, PlyError> 
     Ok(out)
 }
 
-fn read_faces(cur: &mut Cursor, el: &Element, vertex_count: usize) -> Result<Vec<u32>, PlyError> {
+fn read_faces(values: &mut Values, el: &Element, mesh: &mut RawMesh) -> Result<(), PlyError> {
     let is_indices = |name: &str| name == "vertex_indices" || name == "vertex_index";
     if !el
         .properties
@@ -265,26 +372,29 @@ fn read_faces(cur: &mut Cursor, el: &Element, vertex_count: usize) -> Result<Vec
     {
         return Err(PlyError::NoFaces);
     }
-    let mut out = Vec::with_capacity(el.count * 3);
+    let vertex_count = mesh.positions.len();
+    mesh.indices.reserve(el.count * 3);
     let mut corners = Vec::new();
     for face in 0..el.count {
         for p in &el.properties {
             match p {
                 Property::Scalar { ty, .. } => {
-                    cur.take(ty.size(), "faces")?;
+                    values.next(*ty, "faces")?;
                 }
                 Property::List { name, count, item } => {
-                    let n = cur.scalar(*count, "faces")? as usize;
+                    let n = list_len(values, *count, "faces")?;
                     if !is_indices(name) {
-                        cur.take(n * item.size(), "faces")?;
+                        for _ in 0..n {
+                            values.next(*item, "faces")?;
+                        }
                         continue;
                     }
-                    if n < 3 {
+                    if !(3..=MAX_POLYGON_CORNERS).contains(&n) {
                         return Err(PlyError::DegenerateFace { face, count: n });
                     }
                     corners.clear();
                     for _ in 0..n {
-                        let index = cur.scalar(*item, "faces")? as i64;
+                        let index = values.next(*item, "faces")? as i64;
                         if index < 0 || index as usize >= vertex_count {
                             return Err(PlyError::IndexOutOfRange {
                                 face,
@@ -294,26 +404,36 @@ fn read_faces(cur: &mut Cursor, el: &Element, vertex_count: usize) -> Result<Vec
                         }
                         corners.push(index as u32);
                     }
-                    for k in 1..n - 1 {
-                        out.extend_from_slice(&[corners[0], corners[k], corners[k + 1]]);
+                    let before = mesh.indices.len();
+                    super::mesh::push_fan(&corners, &mesh.positions, &mut mesh.indices);
+                    if mesh.indices.len() == before {
+                        mesh.dropped_degenerate += 1;
+                    }
+                    if mesh.indices.len() / 3 > MAX_TRIANGLES {
+                        return Err(PlyError::TooMany {
+                            what: "triangles",
+                            count: mesh.indices.len() / 3,
+                            limit: MAX_TRIANGLES,
+                        });
                     }
                 }
             }
         }
     }
-    Ok(out)
+    Ok(())
 }
 
-fn skip_element(cur: &mut Cursor, el: &Element) -> Result<(), PlyError> {
+fn skip_element(values: &mut Values, el: &Element) -> Result<(), PlyError> {
     for _ in 0..el.count {
         for p in &el.properties {
             match p {
                 Property::Scalar { ty, .. } => {
-                    cur.take(ty.size(), "an extra element")?;
+                    values.next(*ty, "an extra element")?;
                 }
                 Property::List { count, item, .. } => {
-                    let n = cur.scalar(*count, "an extra element")? as usize;
-                    cur.take(n * item.size(), "an extra element")?;
+                    for _ in 0..list_len(values, *count, "an extra element")? {
+                        values.next(*item, "an extra element")?;
+                    }
                 }
             }
         }
@@ -365,8 +485,76 @@ element face 1\nproperty list uchar int vertex_indices\nend_header\n"
         let mut short = quad_ply(3);
         short.truncate(short.len() - 3);
         assert_eq!(parse_ply(&short), Err(PlyError::Truncated("faces")));
-        let ascii = b"ply\nformat ascii 1.0\nelement vertex 0\nend_header\n";
-        assert_eq!(parse_ply(ascii), Err(PlyError::Format("ascii".into())));
+        let odd = b"ply\nformat binary_middle_endian 1.0\nelement vertex 0\nend_header\n";
+        assert_eq!(
+            parse_ply(odd),
+            Err(PlyError::Format("binary_middle_endian".into()))
+        );
+    }
+
+    #[test]
+    fn ascii_and_big_endian_read_the_same_quad() {
+        let ascii =
+            b"ply\nformat ascii 1.0\nelement vertex 4\nproperty float x\nproperty float y\n\
+property float z\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n\
+0 0 0\n1 0 0\n1 1 0\n0 1 0\n4 0 1 2 3\n";
+        let le = parse_ply(&quad_ply(3)).unwrap();
+        assert_eq!(parse_ply(ascii).unwrap(), le);
+        let mut be = b"ply\nformat binary_big_endian 1.0\nelement vertex 4\nproperty float x\n\
+property float y\nproperty float z\nproperty uchar red\nelement face 1\n\
+property list uchar int vertex_indices\nend_header\n"
+            .to_vec();
+        for (x, y) in [(0.0f32, 0.0f32), (1.0, 0.0), (1.0, 1.0), (0.0, 1.0)] {
+            for c in [x, y, 0.0] {
+                be.extend_from_slice(&c.to_be_bytes());
+            }
+            be.push(7);
+        }
+        be.push(4);
+        for i in [0i32, 1, 2, 3] {
+            be.extend_from_slice(&i.to_be_bytes());
+        }
+        assert_eq!(parse_ply(&be).unwrap(), le);
+    }
+
+    #[test]
+    fn lying_counts_are_refused_before_allocating() {
+        let huge = b"ply\nformat binary_little_endian 1.0\nelement vertex 1000000000\n\
+property float x\nproperty float y\nproperty float z\nend_header\n";
+        assert!(matches!(
+            parse_ply(huge),
+            Err(PlyError::TooMany {
+                count: 1_000_000_000,
+                ..
+            })
+        ));
+        let more = b"ply\nformat ascii 1.0\nelement vertex 1000\nproperty float x\n\
+property float y\nproperty float z\nend_header\n0 0 0\n";
+        assert_eq!(parse_ply(more), Err(PlyError::Truncated("vertices")));
+        let list = b"ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\n\
+property float y\nproperty float z\nelement face 1\nproperty list uint int vertex_indices\n\
+end_header\n0 0 0 1 0 0 0 1 0 4000000000 0 1 2\n";
+        assert_eq!(parse_ply(list), Err(PlyError::Truncated("faces")));
+        let nan = b"ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\n\
+property float y\nproperty float z\nelement face 0\nproperty list uchar int vertex_indices\n\
+end_header\n0 0 0 1 nan 0 0 1 0\n";
+        assert_eq!(parse_ply(nan), Err(PlyError::NonFinite(1)));
+        let word = b"ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\n\
+property float y\nproperty float z\nend_header\n0 zero 0\n";
+        assert!(matches!(parse_ply(word), Err(PlyError::BadNumber { .. })));
+    }
+
+    #[test]
+    fn degenerate_faces_are_dropped_and_counted() {
+        let text = b"ply\nformat ascii 1.0\nelement vertex 4\nproperty float x\n\
+property float y\nproperty float z\nelement face 3\nproperty list uchar int vertex_indices\n\
+end_header\n0 0 0\n1 0 0\n0 1 0\n2 0 0\n3 0 1 2\n3 0 0 1\n3 0 1 3\n";
+        let m = parse_ply(text).unwrap();
+        assert_eq!(m.indices, vec![0, 1, 2]);
+        assert_eq!(
+            m.dropped_degenerate, 2,
+            "a repeated corner and a collinear triple"
+        );
     }
 
     #[test]
