@@ -48,6 +48,9 @@ struct Frame {
     cut_epsilon: f32,
     rung: u32,
     pyramid_ready: u32,
+    light_count: u32,
+    shadow_view_proj: mat4x4<f32>,
+    shadow_params: vec4<f32>,
 }
 
 // One material, as the renderer uploads it (src/render/materials.rs).
@@ -57,14 +60,20 @@ struct Material {
     // 1 when the scene plan gives this translucent material its subsurface rungs.
     subsurface: u32,
     eta: f32,
-    _pad: f32,
-    // Opaque albedo, or the dipole's total diffuse reflectance per channel.
+    // 1 when back faces are shaded (with the normal turned to face the viewer).
+    double_sided: u32,
+    // Opaque albedo (base colour), or the dipole's total diffuse reflectance per channel.
     albedo: vec4<f32>,
     // Dipole constants per channel (mm, mm⁻¹): σtr, z_r, z_v, reduced albedo α'.
     sigma_tr: vec4<f32>,
     z_r: vec4<f32>,
     z_v: vec4<f32>,
     alpha: vec4<f32>,
+    // x: GGX α (clamped ≥ optics::specular::MIN_ALPHA); y: metallic; z: a dielectric's F0.
+    surface: vec4<f32>,
+    // The specular lobe's directional albedo split E(μ) = F0·A + F90·B at LOBE_TABLE values
+    // of μ: entry i is (A, B) in lobe[i / 2].xy (even i) or .zw (odd i).
+    lobe: array<vec4<f32>, 8>,
 }
 
 // A node of the light-space photon pyramid.
@@ -75,21 +84,158 @@ struct PhotonNode {
     flux: vec4<f32>,
 }
 
-// Fresnel transmittance of unpolarised light, exact dielectric form (CPU twin:
-// optics::dipole::fresnel_transmittance).
-fn fresnel_transmittance(eta: f32, cos_theta: f32) -> f32 {
-    let ci = clamp(cos_theta, 0.0, 1.0);
-    if (ci <= 0.0) {
+// ---- Microfacet specular (CPU twin: optics::specular; Karis's UE4 form) ----
+
+fn lobe_entry(m: Material, i: u32) -> vec2<f32> {
+    let q = m.lobe[i / 2u];
+    if ((i & 1u) == 0u) {
+        return q.xy;
+    }
+    return q.zw;
+}
+
+// Schlick's F90: min(50 F0, 1), so F0 → 0 (η → 1) reflects nothing even at grazing angles.
+fn f90_of(f0: vec3<f32>) -> vec3<f32> {
+    return min(50.0 * f0, vec3<f32>(1.0));
+}
+
+// The specular lobe's directional albedo E(μ) per channel (optics::specular::lobe_albedo).
+fn lobe_albedo(m: Material, f0: vec3<f32>, mu: f32) -> vec3<f32> {
+    if (has_mode(MODE_NO_SPECULAR)) {
+        return vec3<f32>(0.0);
+    }
+    return lobe_albedo_always(m, f0, mu);
+}
+
+// `lobe_albedo` whatever the frame's mode: for passes without the frame uniform (photons).
+fn lobe_albedo_always(m: Material, f0: vec3<f32>, mu: f32) -> vec3<f32> {
+    let x = clamp(mu, 0.0, 1.0) * f32(LOBE_TABLE - 1u);
+    let i = min(u32(floor(x)), LOBE_TABLE - 2u);
+    let t = x - f32(i);
+    let ab = mix(lobe_entry(m, i), lobe_entry(m, i + 1u), t);
+    return clamp(f0 * ab.x + f90_of(f0) * ab.y, vec3<f32>(0.0), vec3<f32>(1.0));
+}
+
+// F0 per channel: a dielectric's from its index, a metal's from its (tinted) base colour.
+fn specular_f0(m: Material, base: vec3<f32>) -> vec3<f32> {
+    return mix(vec3<f32>(m.surface.z), base, m.surface.y);
+}
+
+// π D V F (optics::specular::specular without the n·l it multiplies by), per channel.
+fn specular_lobe(m: Material, f0: vec3<f32>, n: vec3<f32>, v: vec3<f32>, l: vec3<f32>) -> vec3<f32> {
+    let n_l = dot(n, l);
+    let n_v = dot(n, v);
+    if (n_l <= 0.0 || n_v <= 0.0 || has_mode(MODE_NO_SPECULAR)) {
+        return vec3<f32>(0.0);
+    }
+    let h = normalize(l + v);
+    let a = m.surface.x;
+    let a2 = a * a;
+    let n_h = clamp(dot(n, h), 0.0, 1.0);
+    let d0 = n_h * n_h * (a2 - 1.0) + 1.0;
+    let d = a2 / (3.14159265 * d0 * d0);
+    let cv = clamp(n_v, 1e-4, 1.0);
+    let cl = clamp(n_l, 1e-4, 1.0);
+    let vis = 0.5 / (cl * sqrt(cv * cv * (1.0 - a2) + a2) + cv * sqrt(cl * cl * (1.0 - a2) + a2));
+    let fc = pow(1.0 - clamp(dot(v, h), 0.0, 1.0), 5.0);
+    let f = f0 + (f90_of(f0) - f0) * fc;
+    return 3.14159265 * d * vis * f;
+}
+
+// What a unit light along l sends towards v off a surface with diffuse reflectance `diffuse`
+// (optics::specular::surface): the diffuse part scaled by what crosses the interface both
+// ways, plus the lobe, times n·l.
+fn surface_light(m: Material, f0: vec3<f32>, diffuse: vec3<f32>, n: vec3<f32>, v: vec3<f32>, l: vec3<f32>) -> vec3<f32> {
+    let n_l = dot(n, l);
+    let n_v = dot(n, v);
+    if (n_l <= 0.0 || n_v <= 0.0) {
+        return vec3<f32>(0.0);
+    }
+    let cross = (1.0 - lobe_albedo(m, f0, n_l)) * (1.0 - lobe_albedo(m, f0, n_v));
+    return n_l * (diffuse * cross + specular_lobe(m, f0, n, v, l));
+}
+
+// The share of light crossing a translucent material's rough interface at incidence cos θ:
+// 1 − E(cos θ) (Walter et al. 2007 reduced to the total the dipole needs; 0 below the horizon).
+fn transmitted(m: Material, cos_theta: f32) -> f32 {
+    if (cos_theta <= 0.0) {
         return 0.0;
     }
-    let sin2_t = (1.0 - ci * ci) / (eta * eta);
-    if (sin2_t >= 1.0) {
+    return 1.0 - lobe_albedo(m, vec3<f32>(m.surface.z), cos_theta).x;
+}
+
+// `transmitted` for the photon pass, which has no frame (the specular knob does not reach it).
+fn transmitted_always(m: Material, cos_theta: f32) -> f32 {
+    if (cos_theta <= 0.0) {
         return 0.0;
     }
-    let ct = sqrt(1.0 - sin2_t);
-    let rs = (ci - eta * ct) / (ci + eta * ct);
-    let rp = (eta * ci - ct) / (eta * ci + ct);
-    return 1.0 - 0.5 * (rs * rs + rp * rp);
+    return 1.0 - lobe_albedo_always(m, vec3<f32>(m.surface.z), cos_theta).x;
+}
+
+// ---- Shadows and lights ----
+
+// How much of the key light reaches world point x with normal n (1 lit … 0 shadowed): the
+// shadow map tested at x moved off the surface along n, with a depth bias, over a 3×3 tent
+// (a 4×4 texel footprint, bilinear weights) so edges are soft rather than stair-stepped.
+fn shadow_factor(map: texture_2d<f32>, x: vec3<f32>, n: vec3<f32>) -> f32 {
+    if (has_mode(MODE_NO_SHADOWS) || frame.shadow_params.z == 0.0) {
+        return 1.0;
+    }
+    let p = frame.shadow_view_proj * vec4<f32>(x + n * frame.shadow_params.y, 1.0);
+    let side = frame.shadow_params.w;
+    let uv = vec2<f32>(p.x * 0.5 + 0.5, 0.5 - p.y * 0.5) * side - 0.5;
+    let z = p.z - frame.shadow_params.x;
+    let base = floor(uv);
+    let f = uv - base;
+    var wx = array<f32, 4>(1.0 - f.x, 1.0, 1.0, f.x);
+    var wy = array<f32, 4>(1.0 - f.y, 1.0, 1.0, f.y);
+    var lit = 0.0;
+    let last = i32(side) - 1;
+    for (var j = 0; j < 4; j++) {
+        for (var i = 0; i < 4; i++) {
+            let t = clamp(vec2<i32>(base) + vec2<i32>(i - 1, j - 1), vec2<i32>(0), vec2<i32>(last));
+            let occluder = textureLoad(map, t, 0).x;
+            lit += select(0.0, wx[i] * wy[j], z <= occluder);
+        }
+    }
+    return lit / 9.0;
+}
+
+// An extra punctual light (src/render/lights.rs GpuLight).
+struct PunctualLight {
+    // xyz: position, or the unit vector towards a directional light; w: 0 directional,
+    // 1 point, 2 spot.
+    position_kind: vec4<f32>,
+    // rgb: colour × intensity; w: range (0: none).
+    color_range: vec4<f32>,
+    // xyz: spot axis (away from the light); w: cos of the outer angle.
+    axis_cos_outer: vec4<f32>,
+    // x: cos of the inner angle.
+    cone: vec4<f32>,
+}
+
+// (unit vector towards the light, irradiance facing it) at x, packed as two vec4s
+// (CPU twin: optics::lights::punctual).
+fn punctual_light(li: PunctualLight, x: vec3<f32>) -> array<vec3<f32>, 2> {
+    let kind = u32(li.position_kind.w);
+    if (kind == 0u) {
+        return array<vec3<f32>, 2>(normalize(li.position_kind.xyz), li.color_range.rgb);
+    }
+    let to = li.position_kind.xyz - x;
+    let d = max(length(to), 1e-4);
+    let l = to / d;
+    var falloff = 1.0 / (d * d);
+    let range = li.color_range.w;
+    if (range > 0.0) {
+        let q = clamp(1.0 - pow(d / range, 4.0), 0.0, 1.0);
+        falloff *= q * q;
+    }
+    if (kind == 2u) {
+        let co = li.axis_cos_outer.w;
+        let t = clamp((dot(-l, li.axis_cos_outer.xyz) - co) / max(li.cone.x - co, 1e-6), 0.0, 1.0);
+        falloff *= t * t;
+    }
+    return array<vec3<f32>, 2>(l, li.color_range.rgb * falloff);
 }
 
 // Dipole diffuse reflectance R_d(r) per channel, r in mm (corrected eq. 4; CPU twin:
@@ -157,6 +303,9 @@ struct VertexIn {
     // scenes without radiosity.
     @location(4) gi_direct: vec4<f32>,
     @location(5) gi_indirect: vec4<f32>,
+    // Linear RGBA multiplying the base colour (glTF vertex colours and textures; white
+    // elsewhere).
+    @location(6) tint: vec4<f32>,
 }
 
 // The light-space photon pass's uniforms (src/render/pass/photons.rs PhotonUniform).

@@ -10,6 +10,7 @@ struct VertexOut {
     @location(2) blurred_normal: vec3<f32>,
     @location(3) @interpolate(flat) material: u32,
     @location(4) irradiance: vec3<f32>,
+    @location(5) tint: vec3<f32>,
 }
 
 struct GBuffer {
@@ -33,23 +34,41 @@ fn vs_main(v: VertexIn) -> VertexOut {
     out.blurred_normal = v.blurred_normal;
     out.material = v.material;
     out.irradiance = v.gi_direct.rgb;
+    out.tint = v.tint.rgb;
     if (!has_mode(MODE_DIRECT_ONLY)) {
         out.irradiance += v.gi_indirect.rgb;
     }
     return out;
 }
 
+// Both faces are rasterised: a one-sided material's back faces are discarded (culling, per
+// material), a double-sided one's are shaded with the normal turned towards the viewer.
 @fragment
-fn fs_main(in: VertexOut) -> GBuffer {
+fn fs_main(in: VertexOut, @builtin(front_facing) front: bool) -> GBuffer {
     var g: GBuffer;
+    let m = materials[in.material];
+    if (!front && m.double_sided == 0u) {
+        discard;
+    }
     let len = length(in.normal);
     var n = vec3<f32>(0.0);
     if (len > 1e-20) {
         n = in.normal / len;
     }
+    var blurred = in.blurred_normal;
+    if (!front) {
+        n = -n;
+        blurred = -blurred;
+    }
     g.normal_distance = vec4<f32>(n, distance(in.world, frame.eye));
-    g.albedo = vec4<f32>(materials[in.material].albedo.rgb, f32(in.material + 1u) / 255.0);
+    // Opaque surfaces take the vertex tint (textures, vertex colours); the translucent
+    // rungs shade with the dipole's own reflectance.
+    var albedo = m.albedo.rgb;
+    if (m.kind == 0u) {
+        albedo *= in.tint;
+    }
+    g.albedo = vec4<f32>(albedo, f32(in.material + 1u) / 255.0);
     g.irradiance = vec4<f32>(in.irradiance, 0.0);
-    g.blurred_normal = vec4<f32>(clamp(in.blurred_normal, vec3<f32>(-1.0), vec3<f32>(1.0)) * 0.5 + 0.5, 0.0);
+    g.blurred_normal = vec4<f32>(clamp(blurred, vec3<f32>(-1.0), vec3<f32>(1.0)) * 0.5 + 0.5, 0.0);
     return g;
 }

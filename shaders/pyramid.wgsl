@@ -29,12 +29,12 @@ fn leaves(@builtin(global_invocation_id) id: vec3<u32>) {
     if (pos.w > 0.5 && nrm.w > 0.5) {
         let m = materials[u32(round(nrm.w)) - 1u];
         let cos_i = dot(nrm.xyz, photons.to_light.xyz);
-        var flux = photons.light.rgb * fresnel_transmittance(m.eta, cos_i) * photons.params.y;
+        var flux = photons.light.rgb * transmitted_always(m, cos_i) * photons.params.y;
         // Radiosity's irradiance arrives from every direction: it enters the texel's whole
         // footprint on the surface (A⊥ / cos, the slant bounded as for the extent), through
-        // the Fresnel transmittance at 60° incidence, the cosine-weighted hemisphere's median.
+        // the interface's transmission at 60° incidence, the cosine-weighted hemisphere's median.
         let gi = textureLoad(photon_irradiance, p, 0).rgb;
-        flux += gi * fresnel_transmittance(m.eta, 0.5) * photons.params.y / max(cos_i, 0.2);
+        flux += gi * transmitted_always(m, 0.5) * photons.params.y / max(cos_i, 0.2);
         // Half the texel diagonal, stretched by the slant of the surface under the light.
         let extent = 0.7071 * photons.params.z / max(cos_i, 0.2);
         node.pos_extent = vec4<f32>(pos.xyz, extent);

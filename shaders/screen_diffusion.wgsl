@@ -11,6 +11,7 @@
 @group(0) @binding(4) var<storage, read> reach_mm: array<vec4<f32>>;
 @group(0) @binding(5) var<storage, read> src: array<vec4<f32>>;
 @group(0) @binding(6) var<storage, read_write> dst: array<vec4<f32>>;
+@group(0) @binding(7) var shadow_tex: texture_2d<f32>;
 
 const MAX_TAPS: i32 = 16;
 
@@ -24,8 +25,10 @@ fn irradiance(@builtin(global_invocation_id) id: vec3<u32>) {
     var e = vec3<f32>(0.0);
     if (a.a > 0.0) {
         let m = materials[material_id(a.a)];
-        let cos_i = dot(textureLoad(normal_distance, p, 0).xyz, frame.to_light);
-        e = frame.light * max(cos_i, 0.0) * fresnel_transmittance(m.eta, cos_i);
+        let nd = textureLoad(normal_distance, p, 0);
+        let cos_i = dot(nd.xyz, frame.to_light);
+        let x = frame.eye + view_ray(vec2<f32>(p) + 0.5) * nd.w;
+        e = frame.light * shadow_factor(shadow_tex, x, nd.xyz) * max(cos_i, 0.0) * transmitted(m, cos_i);
     }
     dst[index_of(p)] = vec4<f32>(e, 1.0);
 }

@@ -3,9 +3,12 @@
 // the whole frame, shading every pixel in full mode and only sampled ones otherwise (the
 // uncompacted variant the compaction is measured against).
 //
-// Opaque materials: Lambert. Translucent materials, by the frame's rung (all from the same
-// physical inputs σ's, σa, η and the same light):
-//   opaque       the dipole's total diffuse reflectance as a BRDF albedo, Fresnel in and out;
+// Every surface: GGX specular from the key light (shadowed) and the extra punctual lights
+// (unshadowed), with the diffuse part scaled by what crosses the interface (common.wgsl).
+// Opaque materials: Lambert + GGX, base colour tinted per vertex. Translucent materials, by
+// the frame's rung (all from the same physical inputs σ's, σa, η and the same light):
+//   opaque       the dipole's total diffuse reflectance as a BRDF albedo, the rough interface's
+//                transmission in and out;
 //   normal blur  the same with normals pre-blurred over the subsurface reach (seed 001 #6);
 //   screen       irradiance blurred in screen space by the dipole profile (screen_diffusion);
 //   hierarchical the dipole summed over a cut through the light-space photon pyramid (seed 000
@@ -24,6 +27,18 @@
 @group(0) @binding(9) var<storage, read> nodes: array<PhotonNode>;
 @group(0) @binding(10) var<storage, read> diffused: array<vec4<f32>>;
 @group(0) @binding(11) var irradiance_tex: texture_2d<f32>;
+@group(0) @binding(12) var shadow_tex: texture_2d<f32>;
+@group(0) @binding(13) var<storage, read> lights: array<PunctualLight>;
+
+// Diffuse `diffuse` and specular light from every extra punctual light (no shadows).
+fn extra_lights(m: Material, f0: vec3<f32>, diffuse: vec3<f32>, n: vec3<f32>, v: vec3<f32>, x: vec3<f32>) -> vec3<f32> {
+    var sum = vec3<f32>(0.0);
+    for (var i = 0u; i < frame.light_count; i++) {
+        let le = punctual_light(lights[i], x);
+        sum += le[1] * surface_light(m, f0, diffuse, n, v, le[0]);
+    }
+    return sum;
+}
 
 // Index of the first node of pyramid level `level` (level 0: the photon map itself).
 fn level_offset(level: u32) -> u32 {
@@ -122,40 +137,55 @@ fn shade(p: vec2<i32>) {
     if (a.a > 0.0) {
         let nd = textureLoad(normal_distance, p, 0);
         let m = materials[material_id(a.a)];
-        let ambient = m.albedo.rgb * frame.light * frame.ambient;
+        let n = nd.xyz;
+        let ray = view_ray(vec2<f32>(p) + 0.5);
+        let v = -ray;
+        let x = frame.eye + ray * nd.w;
         let l = frame.to_light;
-        let v = -view_ray(vec2<f32>(p) + 0.5);
-        let cos_i = dot(nd.xyz, l);
-        let ft_out = fresnel_transmittance(m.eta, dot(nd.xyz, v));
+        let key = frame.light * shadow_factor(shadow_tex, x, n);
+        let cos_i = dot(n, l);
+        // Radiosity's irradiance (direct from area lights + interreflected); zero without it.
+        let gi = textureLoad(irradiance_tex, p, 0).rgb;
         var rung = frame.rung;
         if (m.subsurface == 0u || (rung >= RUNG_HIERARCHICAL && frame.pyramid_ready == 0u)) {
             rung = RUNG_OPAQUE;
         }
-        // Radiosity's irradiance (direct from area lights + interreflected); zero without it.
-        let gi = textureLoad(irradiance_tex, p, 0).rgb;
         if (m.kind == 2u) {
             // An area light shows its own exitance.
             rgb = m.albedo.rgb;
         } else if (m.kind == 0u) {
-            rgb = lambert(nd.xyz, m.albedo.rgb) + m.albedo.rgb * gi;
-        } else if (rung == RUNG_OPAQUE) {
-            rgb = m.albedo.rgb * (frame.light * max(cos_i, 0.0) * fresnel_transmittance(m.eta, cos_i) + gi) * ft_out + ambient;
-        } else if (rung == RUNG_NORMAL_BLUR) {
-            let nb = textureLoad(blurred_normal_tex, p, 0).xyz * 2.0 - 1.0;
-            let len = max(length(nb), 1e-6);
-            let cos_b = dot(nb, l);
-            rgb = m.albedo.rgb * (frame.light * max(cos_b, 0.0) * fresnel_transmittance(m.eta, cos_b / len) + gi) * ft_out + ambient;
-        } else if (rung == RUNG_SCREEN) {
-            rgb = m.albedo.rgb * (diffused[index_of(p)].rgb + gi) * ft_out + ambient;
+            // The G-buffer's albedo is the base colour times the vertex tint.
+            let diffuse = a.rgb * (1.0 - m.surface.y);
+            let f0 = specular_f0(m, a.rgb);
+            // The ambient light is a uniform sky: the lobe returns E(μ_o) of it, the diffuse
+            // part what crosses the interface (so metals are not black where no light hits).
+            let e_o = lobe_albedo(m, f0, dot(n, v));
+            let ambient = frame.light * frame.ambient * (diffuse * (1.0 - e_o) + e_o);
+            rgb = key * surface_light(m, f0, diffuse, n, v, l) + extra_lights(m, f0, diffuse, n, v, x)
+                + diffuse * gi + ambient;
         } else {
-            let x_o = frame.eye + view_ray(vec2<f32>(p) + 0.5) * nd.w;
-            var sum: vec3<f32>;
-            if (rung == RUNG_BRUTE_FORCE) {
-                sum = gather_all(x_o, m);
+            let f0 = vec3<f32>(m.surface.z);
+            let ambient = (m.albedo.rgb + lobe_albedo(m, f0, dot(n, v))) * frame.light * frame.ambient;
+            let t_out = transmitted(m, dot(n, v));
+            // The interface's reflection of every light, and the extra lights' diffuse part.
+            let surface = key * max(cos_i, 0.0) * specular_lobe(m, f0, n, v, l)
+                + extra_lights(m, f0, m.albedo.rgb, n, v, x);
+            var body: vec3<f32>;
+            if (rung == RUNG_OPAQUE) {
+                body = m.albedo.rgb * (key * max(cos_i, 0.0) * transmitted(m, cos_i) + gi) * t_out;
+            } else if (rung == RUNG_NORMAL_BLUR) {
+                let nb = textureLoad(blurred_normal_tex, p, 0).xyz * 2.0 - 1.0;
+                let len = max(length(nb), 1e-6);
+                let cos_b = dot(nb, l);
+                body = m.albedo.rgb * (key * max(cos_b, 0.0) * transmitted(m, cos_b / len) + gi) * t_out;
+            } else if (rung == RUNG_SCREEN) {
+                body = m.albedo.rgb * (diffused[index_of(p)].rgb + gi) * t_out;
+            } else if (rung == RUNG_BRUTE_FORCE) {
+                body = gather_all(x, m) * t_out;
             } else {
-                sum = gather_cut(x_o, m);
+                body = gather_cut(x, m) * t_out;
             }
-            rgb = sum * ft_out + ambient;
+            rgb = body + ambient + surface;
         }
     }
     out_color[index_of(p)] = vec4<f32>(rgb, 0.0);

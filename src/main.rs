@@ -54,6 +54,11 @@ enum Command {
         /// replayable with `fovea replay`).
         #[arg(long)]
         record_dir: Option<PathBuf>,
+        /// A folder of scenes to serve beside the built-in ones (repeatable): every scene file
+        /// (.json) and glTF file (.gltf, .glb) at its top level, named by file stem. Files
+        /// they refer to are read from inside the folder only.
+        #[arg(long = "scenes", value_name = "DIR")]
+        scenes: Vec<PathBuf>,
         /// Sessions served at once; more are refused (WebSocket close 1013, /readyz 503).
         #[arg(long, default_value_t = 16, value_parser = clap::value_parser!(u64).range(1..=10000))]
         max_sessions: u64,
@@ -75,10 +80,14 @@ enum Command {
         /// Built-in scene to render.
         #[arg(long, default_value = fovea::scene::DEFAULT_SCENE, value_parser = cli::parse::scene_names())]
         scene: String,
-        /// A scene file of your own (docs/scenes.md) instead of a built-in scene; its meshes
-        /// must be built in.
-        #[arg(long, conflicts_with = "scene")]
+        /// A scene file of your own (docs/scenes.md) instead of a built-in scene; the meshes
+        /// and glTF files it names are read from beside it (never from outside its folder).
+        #[arg(long, conflicts_with_all = ["scene", "model"])]
         scene_file: Option<PathBuf>,
+        /// A model file (.gltf, .glb, .ply, .obj) rendered as a scene: its own lights and
+        /// camera, or a default key light and a camera framing its bounds.
+        #[arg(long, conflicts_with = "scene")]
+        model: Option<PathBuf>,
         /// Frame size WxH.
         #[arg(long, value_parser = parse_size, default_value = "640x480")]
         size: (u32, u32),
@@ -176,6 +185,7 @@ fn main() -> Result<()> {
         Command::Serve {
             addr,
             record_dir,
+            scenes,
             max_sessions,
             stall_timeout_s,
             hello_timeout_s,
@@ -186,6 +196,7 @@ fn main() -> Result<()> {
                 max_sessions: max_sessions as usize,
                 stall_timeout: std::time::Duration::from_secs_f64(stall_timeout_s),
                 hello_timeout: std::time::Duration::from_secs_f64(hello_timeout_s),
+                catalog: fovea::scene::Catalog::with_folders(&scenes)?,
             },
         ),
         Command::Bench(args) => bench(args),
@@ -197,6 +208,7 @@ fn main() -> Result<()> {
         Command::Render {
             scene,
             scene_file,
+            model,
             size: (width, height),
             gaze,
             no_marker,
@@ -212,12 +224,8 @@ fn main() -> Result<()> {
             knobs,
         } => {
             let own = scene_file
-                .map(|path| {
-                    let json = std::fs::read_to_string(&path)
-                        .with_context(|| format!("reading {}", path.display()))?;
-                    fovea::scene::Scene::from_json(&json)
-                        .with_context(|| format!("loading {}", path.display()))
-                })
+                .or(model)
+                .map(|path| load_own_scene(&path))
                 .transpose()?;
             let scene = own.as_ref().map_or(scene, |s| s.name().to_string());
             if explain {
@@ -279,6 +287,7 @@ fn plot(file: &std::path::Path) -> Result<()> {
 
 fn serve(addr: SocketAddr, options: fovea::server::ServerOptions) -> Result<()> {
     let mut renderer = Renderer::new().context("opening the GPU")?;
+    renderer.set_catalog(options.catalog.clone());
     renderer
         .load_scene(fovea::scene::DEFAULT_SCENE)
         .context("loading the default scene")?;
@@ -327,6 +336,21 @@ async fn stop_on_signal(shutdown: CancellationToken) {
     let _ = ctrl_c.await;
     tracing::info!("shutting down: closing sessions");
     shutdown.cancel();
+}
+
+/// A scene file or model from the command line, confined to the folder it is in.
+fn load_own_scene(path: &std::path::Path) -> Result<fovea::scene::Scene> {
+    let dir = match path.parent() {
+        Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
+        _ => PathBuf::from("."),
+    };
+    let folder = fovea::scene::Folder::open(&dir)?;
+    let scene = fovea::scene::Scene::load(path, &folder)
+        .with_context(|| format!("loading {}", path.display()))?;
+    for note in &scene.notes {
+        eprintln!("note: {note}");
+    }
+    Ok(scene)
 }
 
 fn render(

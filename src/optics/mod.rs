@@ -4,6 +4,7 @@
 pub mod acuity;
 pub mod color;
 pub mod dipole;
+pub mod lights;
 pub mod saliency;
 pub mod shading;
 pub mod specular;

@@ -14,6 +14,34 @@ pub struct Limits {
     pub pupil_mm: [f64; 2],
     /// Gaze coordinates are normalised to the frame, top-left origin, both in this closed range.
     pub gaze: [f64; 2],
+    /// What the server's scene files may hold (`serve --scenes`; `docs/scenes.md`).
+    #[serde(default)]
+    pub scene_files: SceneFileLimits,
+}
+
+/// The limits every scene and model file is loaded under (`scene::limits`).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct SceneFileLimits {
+    pub max_file_bytes: u64,
+    pub max_vertices: usize,
+    pub max_triangles: usize,
+    pub max_texture_edge: u32,
+    pub max_materials: usize,
+    pub max_lights: usize,
+}
+
+impl Default for SceneFileLimits {
+    fn default() -> Self {
+        use crate::scene::limits as l;
+        SceneFileLimits {
+            max_file_bytes: l::MAX_FILE_BYTES,
+            max_vertices: l::MAX_VERTICES,
+            max_triangles: l::MAX_TRIANGLES,
+            max_texture_edge: l::MAX_TEXTURE_EDGE,
+            max_materials: crate::scene::MAX_MATERIALS,
+            max_lights: crate::scene::MAX_LIGHTS,
+        }
+    }
 }
 
 impl Default for Limits {
@@ -25,6 +53,7 @@ impl Default for Limits {
             max_in_flight: 8,
             pupil_mm: [1.0, 10.0],
             gaze: [0.0, 1.0],
+            scene_files: SceneFileLimits::default(),
         }
     }
 }

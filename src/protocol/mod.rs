@@ -15,7 +15,7 @@ pub use error::{ErrorCode, ProtocolError};
 pub use frame::{
     decode_frame, encode_frame, FrameHeader, GazeUsed, SolveProgress, StageTimes, Trigger,
 };
-pub use limits::Limits;
+pub use limits::{Limits, SceneFileLimits};
 pub use messages::{
     Ack, Codec, Display, ErrorMessage, Gaze, Hello, SceneInfo, ServerMessage, Welcome,
     PROTOCOL_VERSION,

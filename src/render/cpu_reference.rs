@@ -1,11 +1,12 @@
-//! A CPU rasteriser for opaque scenes: the same camera, the same Lambert shading
-//! (`optics::shading::lambert`) with each vertex's material albedo, pixel centres sampled,
-//! perspective-correct normals. Slow and simple on purpose; tests hold the GPU image to it.
+//! A CPU rasteriser for opaque scenes: the same camera, the same shading (Lambert + GGX,
+//! `optics::specular::surface`, and the ambient sky) with each vertex's material, pixel
+//! centres sampled, perspective-correct normals, no shadows. Slow and simple on purpose; tests
+//! hold the GPU image (rendered with shadows off) to it.
 
 use glam::{Vec3, Vec4, Vec4Swizzles};
 
 use crate::optics::color::{linear_to_srgb8, srgb8_to_linear};
-use crate::optics::shading::lambert;
+use crate::optics::specular;
 use crate::scene::Scene;
 
 /// The reference image: sRGB RGBA8 like the GPU's, plus which pixels the mesh covers.
@@ -108,7 +109,7 @@ fn rasterise(scene: &Scene, width: u32, height: u32) -> GBuffer {
     }
 }
 
-/// Lambert shading of the covered pixels; the background elsewhere.
+/// Shading of the covered pixels (key light and ambient, no shadows); the background elsewhere.
 fn shade(
     scene: &Scene,
     g: &GBuffer,
@@ -118,39 +119,79 @@ fn shade(
 ) -> ReferenceImage {
     let n = (width * height) as usize;
     let light = &scene.file.light;
-    let to_light = to_light
+    let l = to_light
         .and_then(|l| l.try_normalize())
-        .unwrap_or(Vec3::from(light.to_light));
+        .unwrap_or(Vec3::from(light.to_light))
+        .as_dvec3();
+    let radiance = (Vec3::from(light.color) * light.intensity).as_dvec3();
+    let ambient = f64::from(scene.file.ambient);
+    let camera = &scene.file.camera;
+    let inv = camera.view_proj(width, height).inverse();
+    let eye = Vec3::from(camera.eye);
+    // Each material's lobe table, as the renderer uploads it.
+    let tables: Vec<_> = scene
+        .materials
+        .iter()
+        .map(|(_, m)| {
+            m.surface()
+                .map(|s| specular::directional_albedo_table(specular::alpha(s.roughness)))
+        })
+        .collect();
     let background = scene.file.background_srgb;
     let mut rgba = Vec::with_capacity(n * 4);
     let mut covered = Vec::with_capacity(n);
     for k in 0..n {
-        if g.depth[k].is_finite() {
-            let c = lambert(
-                g.normal[k],
-                to_light,
-                Vec3::from(
-                    scene.materials[g.material[k] as usize]
-                        .1
-                        .albedo()
-                        .map(|a| a as f32),
-                ),
-                Vec3::from(light.color) * light.intensity,
-                scene.file.ambient,
-            );
-            rgba.extend_from_slice(&[
-                linear_to_srgb8(c.x),
-                linear_to_srgb8(c.y),
-                linear_to_srgb8(c.z),
-                255,
-            ]);
-            covered.push(true);
-        } else {
+        let id = g.material[k] as usize;
+        let (Some(surface), Some(table), true) = (
+            scene.materials[id].1.surface(),
+            tables[id].as_ref(),
+            g.depth[k].is_finite(),
+        ) else {
             // Round-trip so the reference background is exactly what an sRGB clear produces.
             let bg = background.map(|b| linear_to_srgb8(srgb8_to_linear(b)));
             rgba.extend_from_slice(&[bg[0], bg[1], bg[2], 255]);
             covered.push(false);
-        }
+            continue;
+        };
+        let (x, y) = (
+            (k as u32 % width) as f32 + 0.5,
+            (k as u32 / width) as f32 + 0.5,
+        );
+        let ndc = Vec4::new(
+            x / width as f32 * 2.0 - 1.0,
+            1.0 - y / height as f32 * 2.0,
+            1.0,
+            1.0,
+        );
+        let far = inv * ndc;
+        let v = -(far.xyz() / far.w - eye).normalize().as_dvec3();
+        let nrm = g.normal[k].try_normalize().unwrap_or(Vec3::ZERO).as_dvec3();
+        let h = (l + v).normalize();
+        let albedo = scene.materials[id].1.albedo();
+        let alpha = specular::alpha(surface.roughness);
+        let c: [f64; 3] = std::array::from_fn(|c| {
+            let diffuse = albedo[c] * (1.0 - surface.metallic);
+            let f0 = surface.f0[c];
+            let lit = specular::surface(
+                diffuse,
+                f0,
+                alpha,
+                table,
+                nrm.dot(l),
+                nrm.dot(v),
+                nrm.dot(h),
+                v.dot(h),
+            );
+            let e_o = specular::lobe_albedo(table, f0, nrm.dot(v));
+            radiance[c] * (lit + ambient * (diffuse * (1.0 - e_o) + e_o))
+        });
+        rgba.extend_from_slice(&[
+            linear_to_srgb8(c[0] as f32),
+            linear_to_srgb8(c[1] as f32),
+            linear_to_srgb8(c[2] as f32),
+            255,
+        ]);
+        covered.push(true);
     }
     ReferenceImage {
         width,

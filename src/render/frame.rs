@@ -11,15 +11,16 @@ use super::graph::{GraphError, PassDecl, Recorder};
 use super::pass::gbuffer::MeshBuffers;
 use super::pass::{
     compact, dof, gbuffer, jfa, output, photons, pyramid, resolve, sampling, screen_diffusion,
-    shade,
+    shade, shadow,
 };
 use super::request::MIN_XI;
 use crate::foveation::reconstruct::frame_jfa_steps;
 use crate::settings::{RenderSettings, Rung};
 
-/// Every pass the renderer has, in the order a frame meets them (photons and pyramid run once
-/// per static scene, before the frame that first needs them).
-pub const PASSES: [&PassDecl; 11] = [
+/// Every pass the renderer has, in the order a frame meets them (shadow, photons and pyramid run
+/// once per static scene, before the frame that first needs them).
+pub const PASSES: [&PassDecl; 12] = [
+    &shadow::PASS,
     &photons::PASS,
     &pyramid::PASS,
     &gbuffer::PASS,

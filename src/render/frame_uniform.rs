@@ -25,23 +25,8 @@ fn tile_offset(frame: u32) -> [u32; 2] {
     ]
 }
 
-pub(super) fn frame_uniform(
-    scene: &Scene,
-    camera: &Camera,
-    req: &FrameRequest,
-    t: &FrameTargets,
-    to_light: Vec3,
-    pyramid_ready: bool,
-) -> FrameUniform {
-    let (w, h) = (req.width, req.height);
-    let view_proj = camera.view_proj(w, h);
-    let eye = Vec3::from(camera.eye);
-    let (prev_view_proj, prev_eye, history) = if t.has_history {
-        (t.prev_view_proj, t.prev_eye, true)
-    } else {
-        (view_proj, eye, false)
-    };
-    let s = &req.settings;
+/// The frame's MODE_* bits from its settings.
+fn mode_bits(s: &crate::settings::RenderSettings) -> u32 {
     let fov = &s.foveation;
     let mut mode = 0;
     for (on, bit) in [
@@ -53,11 +38,36 @@ pub(super) fn frame_uniform(
         (fov.reconstruction == Reconstruction::Sibson, MODE_SIBSON),
         (s.dof, MODE_DOF),
         (!s.indirect, MODE_DIRECT_ONLY),
+        (!s.shadows, MODE_NO_SHADOWS),
+        (!s.specular, MODE_NO_SPECULAR),
     ] {
         if on {
             mode |= bit;
         }
     }
+    mode
+}
+
+pub(super) fn frame_uniform(
+    scene: &Scene,
+    camera: &Camera,
+    req: &FrameRequest,
+    t: &FrameTargets,
+    to_light: Vec3,
+    pyramid_ready: bool,
+    shadow_ready: bool,
+) -> FrameUniform {
+    let (w, h) = (req.width, req.height);
+    let view_proj = camera.view_proj(w, h);
+    let eye = Vec3::from(camera.eye);
+    let (prev_view_proj, prev_eye, history) = if t.has_history {
+        (t.prev_view_proj, t.prev_eye, true)
+    } else {
+        (view_proj, eye, false)
+    };
+    let s = &req.settings;
+    let fov = &s.foveation;
+    let mode = mode_bits(s);
     let viewing = Viewing::new(req.display, w, h);
     let gaze_px = viewing.to_pixels(req.gaze.map(f64::from));
     let w_min = viewing.pixel_angle_deg();
@@ -66,6 +76,10 @@ pub(super) fn frame_uniform(
         f64::from(fov.mar_slope),
         f64::from(fov.mar_w0_deg),
     );
+    let mut shadow = super::pass::shadow::shadow_view(scene, to_light);
+    if !shadow_ready {
+        shadow.params[2] = 0.0;
+    }
     let lighting = &scene.file.light;
     let light = Vec3::from(lighting.color) * lighting.intensity;
     let target_distance = (Vec3::from(camera.target) - eye).length();
@@ -121,6 +135,9 @@ pub(super) fn frame_uniform(
         cut_epsilon: s.translucency.cut_epsilon.max(0.0),
         rung: s.translucency.rung.id(),
         pyramid_ready: u32::from(pyramid_ready),
+        light_count: scene.file.lights.len() as u32,
+        shadow_view_proj: shadow.view_proj.to_cols_array_2d(),
+        shadow_params: shadow.params,
         ..FrameUniform::default()
     }
 }

@@ -3,6 +3,7 @@
 use bytemuck::{Pod, Zeroable};
 use wgpu::util::DeviceExt;
 
+use crate::optics::specular::{self, ALBEDO_TABLE};
 use crate::scene::{Material, Plan, Scene};
 
 #[repr(C)]
@@ -11,12 +12,31 @@ pub struct GpuMaterial {
     pub kind: u32,
     pub subsurface: u32,
     pub eta: f32,
-    pub _pad: f32,
+    pub double_sided: u32,
     pub albedo: [f32; 4],
     pub sigma_tr: [f32; 4],
     pub z_r: [f32; 4],
     pub z_v: [f32; 4],
     pub alpha: [f32; 4],
+    /// GGX α, metallic, dielectric F0.
+    pub surface: [f32; 4],
+    /// The lobe's directional-albedo table, two (A, B) entries per vec4.
+    pub lobe: [[f32; 4]; ALBEDO_TABLE / 2],
+}
+
+/// The interface half of a material: its α, metallic, F0 and lobe table (zeros for emitters).
+fn interface(m: &Material) -> (u32, [f32; 4], [[f32; 4]; ALBEDO_TABLE / 2]) {
+    let Some(s) = m.surface() else {
+        return (0, [0.0; 4], [[0.0; 4]; ALBEDO_TABLE / 2]);
+    };
+    let alpha = specular::alpha(s.roughness);
+    let table = specular::directional_albedo_table(alpha);
+    let lobe = std::array::from_fn(|k| {
+        let (a, b) = (table[2 * k], table[2 * k + 1]);
+        [a[0] as f32, a[1] as f32, b[0] as f32, b[1] as f32]
+    });
+    let surface = [alpha as f32, s.metallic as f32, s.dielectric_f0 as f32, 0.0];
+    (u32::from(s.double_sided), surface, lobe)
 }
 
 /// The scene's materials; `subsurface` says which translucent ones get the subsurface rungs
@@ -29,17 +49,23 @@ pub fn gpu_materials(scene: &Scene, plan: Option<&Plan>) -> Vec<GpuMaterial> {
         .map(|(id, (_, m))| {
             let albedo = m.albedo();
             let rgba = |v: [f64; 3]| [v[0] as f32, v[1] as f32, v[2] as f32, 0.0];
+            let (double_sided, surface, lobe) = interface(m);
             match m {
                 Material::Opaque { .. } => GpuMaterial {
                     albedo: rgba(albedo),
                     eta: 1.0,
+                    double_sided,
+                    surface,
+                    lobe,
                     ..Default::default()
                 },
                 Material::Translucent { eta, dipole, .. } => GpuMaterial {
                     kind: 1,
                     subsurface: plan.map(|p| p.subsurface(id)).unwrap_or(true) as u32,
                     eta: *eta as f32,
-                    _pad: 0.0,
+                    double_sided,
+                    surface,
+                    lobe,
                     albedo: rgba(albedo),
                     sigma_tr: rgba(dipole.map(|d| d.sigma_tr)),
                     z_r: rgba(dipole.map(|d| d.z_r)),
@@ -84,6 +110,9 @@ pub fn upload_reach(device: &wgpu::Device, scene: &Scene) -> wgpu::Buffer {
 mod tests {
     #[test]
     fn gpu_material_matches_the_wgsl_struct_size() {
-        assert_eq!(std::mem::size_of::<super::GpuMaterial>(), 16 + 5 * 16);
+        assert_eq!(
+            std::mem::size_of::<super::GpuMaterial>(),
+            16 + 6 * 16 + 8 * 16
+        );
     }
 }

@@ -17,6 +17,7 @@ mod frame_uniform;
 mod gi;
 pub mod gpu;
 pub mod graph;
+pub mod lights;
 pub mod materials;
 pub mod pass;
 mod renderer;

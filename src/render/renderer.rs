@@ -11,6 +11,7 @@ use super::frame_uniform::frame_uniform;
 use super::gi::upload_radiosity;
 use super::graph::{Pipelines, Recorder, Resources};
 use super::pass::photons::{PhotonInputs, PhotonPass, SIDE as PHOTON_SIDE};
+use super::pass::shadow::shadow_view;
 use super::request::{FrameRequest, Inspection, RenderedFrame, MAX_SIDE};
 use super::scene_gpu::SceneGpu;
 use super::targets::{map_read, FrameTargets};
@@ -38,6 +39,8 @@ pub struct Renderer {
     pyramid_builds: u64,
     /// The radiosity solves of loaded scenes, shared with `RenderHandle` for `/readyz`.
     solves: Solves,
+    /// Where scenes come from by name.
+    catalog: crate::scene::Catalog,
 }
 
 /// Radiosity solves the renderer's scenes use, readable from any thread.
@@ -87,6 +90,7 @@ impl Renderer {
             timer,
             pyramid_builds: 0,
             solves: Solves::default(),
+            catalog: crate::scene::Catalog::builtin(),
         }
     }
 
@@ -99,10 +103,15 @@ impl Renderer {
         self.timer.enabled()
     }
 
+    /// Sets where scenes come from by name (built in, and `serve --scenes` folders).
+    pub fn set_catalog(&mut self, catalog: crate::scene::Catalog) {
+        self.catalog = catalog;
+    }
+
     /// Loads a scene onto the GPU ahead of its first frame (otherwise the first frame does it).
     pub fn load_scene(&mut self, name: &str) -> Result<&Scene, RenderError> {
         if !self.scenes.contains_key(name) {
-            self.insert_scene(Scene::builtin(name)?)?;
+            self.insert_scene(self.catalog.load(name)?)?;
         }
         self.scenes
             .get(name)
@@ -217,32 +226,50 @@ impl Renderer {
             gi_version: sg.gi_version,
             indirect: req.settings.indirect,
         };
+        let device = &self.gpu.device;
+        let encoder = || {
+            device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
+                label: Some("light views"),
+            })
+        };
+        let mut enc: Option<wgpu::CommandEncoder> = None;
+        if let Some(map) = sg
+            .shadow
+            .as_mut()
+            .filter(|m| req.settings.shadows && m.built_for != Some(to_light))
+        {
+            let view = shadow_view(&sg.scene, to_light);
+            let e = enc.get_or_insert_with(encoder);
+            map.build(
+                &self.gpu.queue,
+                e,
+                &mut self.pipelines,
+                &sg.mesh,
+                &view,
+                to_light,
+                &mut self.timer,
+            )?;
+        }
         let needs =
             self.targets[ti].1.needs_dipole && req.settings.translucency.rung >= Rung::Hierarchical;
-        let Some(map) = sg
+        if let Some(map) = sg
             .photons
             .as_mut()
             .filter(|m| needs && m.built_for != Some(inputs))
-        else {
-            return Ok((None, inputs));
-        };
-        let mut enc = self
-            .gpu
-            .device
-            .create_command_encoder(&wgpu::CommandEncoderDescriptor {
-                label: Some("photons"),
-            });
-        self.photon_pass.build(
-            &self.gpu.queue,
-            &mut enc,
-            map,
-            &sg.scene,
-            &sg.mesh,
-            inputs,
-            &mut self.timer,
-        )?;
-        self.pyramid_builds += 1;
-        Ok((Some(enc.finish()), inputs))
+        {
+            let e = enc.get_or_insert_with(encoder);
+            self.photon_pass.build(
+                &self.gpu.queue,
+                e,
+                map,
+                &sg.scene,
+                &sg.mesh,
+                inputs,
+                &mut self.timer,
+            )?;
+            self.pyramid_builds += 1;
+        }
+        Ok((enc.map(wgpu::CommandEncoder::finish), inputs))
     }
 
     /// Writes the frame's uniforms, records its passes, submits and waits for them.
@@ -261,10 +288,22 @@ impl Renderer {
             .photons
             .as_ref()
             .is_some_and(|m| m.built_for == Some(inputs));
+        let shadow_ready = sg
+            .shadow
+            .as_ref()
+            .is_some_and(|m| m.built_for == Some(inputs.to_light));
         let (device, queue) = (&self.gpu.device, &self.gpu.queue);
         let t = &mut self.targets[ti].1;
         let camera = req.camera.unwrap_or(sg.scene.file.camera);
-        let uniform = frame_uniform(&sg.scene, &camera, req, t, inputs.to_light, pyramid_ready);
+        let uniform = frame_uniform(
+            &sg.scene,
+            &camera,
+            req,
+            t,
+            inputs.to_light,
+            pyramid_ready,
+            shadow_ready,
+        );
         queue.write_buffer(t.buffer("frame.uniform")?, 0, bytemuck::bytes_of(&uniform));
         let plan = FramePlan::of(&req.settings, req.width, req.height, t.needs_dipole);
 

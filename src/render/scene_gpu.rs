@@ -5,6 +5,7 @@ use super::gi::start_radiosity;
 use super::graph::{GraphError, Pipelines, Resources};
 use super::pass::gbuffer::{self, MeshBuffers};
 use super::pass::photons::{PhotonMap, PhotonPass};
+use super::pass::shadow::ShadowMap;
 use crate::radiosity::{Progress, RadiosityHandle};
 use crate::scene::Scene;
 
@@ -12,6 +13,8 @@ pub struct SceneGpu {
     pub scene: Scene,
     pub mesh: MeshBuffers,
     pub photons: Option<PhotonMap>,
+    /// The key light's shadow map (`shadow.depth` in `resources`), when the plan has shadows.
+    pub shadow: Option<ShadowMap>,
     /// `materials.scene` (every translucent material marked subsurface, for the G-buffer and
     /// the photon map), `scene.reach`, and `photons.nodes` (a stand-in without photons).
     pub resources: Resources,
@@ -55,6 +58,30 @@ impl SceneGpu {
             }),
         };
         resources.buffer("photons.nodes", nodes);
+        resources.buffer("lights.scene", super::lights::upload(device, &scene));
+        let shadow = if crate::scene::Plan::of(&scene, 1, 1).shadows {
+            Some(ShadowMap::new(device, pipelines)?)
+        } else {
+            None
+        };
+        let shadow_texture = match &shadow {
+            Some(map) => map
+                .resources
+                .get_texture("shadow.depth")
+                .map(|(t, _)| t.clone()),
+            None => None,
+        };
+        // Bound in place of the map when the scene has none (the shader is told not to look).
+        let shadow_texture = shadow_texture.unwrap_or_else(|| {
+            super::gpu::texture_2d(
+                device,
+                "shadow.none",
+                (1, 1),
+                wgpu::TextureFormat::R32Float,
+                wgpu::TextureUsages::TEXTURE_BINDING,
+            )
+        });
+        resources.texture("shadow.depth", shadow_texture);
         resources.buffer("materials.scene", materials);
         tracing::info!(scene = %scene.name(), triangles = scene.mesh.triangle_count(), translucent = scene.has_translucency(), "scene loaded");
         let radiosity = start_radiosity(&scene);
@@ -62,6 +89,7 @@ impl SceneGpu {
             scene,
             mesh,
             photons,
+            shadow,
             resources,
             radiosity,
             gi: None,

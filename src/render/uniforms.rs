@@ -18,6 +18,10 @@ pub const MODE_SIBSON: u32 = 32;
 pub const MODE_DOF: u32 = 64;
 /// Radiosity's direct light only (the interreflected part left out, for comparison).
 pub const MODE_DIRECT_ONLY: u32 = 128;
+/// The key light's shadow map is not consulted.
+pub const MODE_NO_SHADOWS: u32 = 256;
+/// No specular lobe and no interface losses.
+pub const MODE_NO_SPECULAR: u32 = 512;
 
 /// Per-pixel state written by the sampling pass.
 pub const FLAG_COVERED: u32 = 1;
@@ -35,7 +39,10 @@ pub fn constants() -> Vec<(&'static str, u32)> {
         ("MODE_SIBSON", MODE_SIBSON),
         ("MODE_DOF", MODE_DOF),
         ("MODE_DIRECT_ONLY", MODE_DIRECT_ONLY),
+        ("MODE_NO_SHADOWS", MODE_NO_SHADOWS),
+        ("MODE_NO_SPECULAR", MODE_NO_SPECULAR),
         ("FLAG_COVERED", FLAG_COVERED),
+        ("LOBE_TABLE", crate::optics::specular::ALBEDO_TABLE as u32),
         ("FLAG_SAMPLED", FLAG_SAMPLED),
         ("FLAG_REUSED", FLAG_REUSED),
         ("RUNG_OPAQUE", Rung::Opaque.id()),
@@ -166,7 +173,13 @@ frame_uniform! {
     rung: u32,
     /// 1 when the photon pyramid has been built for this light.
     pyramid_ready: u32,
+    /// How many entries of `lights.scene` (extra punctual lights) shade this frame.
+    light_count: u32,
     _pad0: u32,
     _pad1: u32,
-    _pad2: u32,
+    /// World → the key light's shadow map (x, y in NDC, z in 0..1).
+    shadow_view_proj: [[f32; 4]; 4],
+    /// x: depth bias (shadow-map depth units); y: normal offset (scene units); z: 1 when the
+    /// key light casts shadows; w: shadow map side.
+    shadow_params: [f32; 4],
 }

@@ -89,6 +89,8 @@ pub struct Surface {
     pub metallic: f64,
     /// Normal-incidence specular reflectance per channel (Schlick's F0).
     pub f0: [f64; 3],
+    /// F0 of the dielectric part (from the index of refraction), before metal mixes in.
+    pub dielectric_f0: f64,
     pub double_sided: bool,
 }
 
@@ -116,6 +118,7 @@ impl SurfaceSpec {
             roughness,
             metallic,
             f0,
+            dielectric_f0: dielectric,
             double_sided: self.double_sided,
         })
     }

@@ -156,6 +156,38 @@ impl Scene {
         }
     }
 
+    /// Centre and radius of a sphere around every translucent vertex (scene units).
+    pub fn translucent_bounds(&self) -> (Vec3, f32) {
+        let scene = self;
+        let pts: Vec<Vec3> = scene
+            .mesh
+            .positions
+            .iter()
+            .zip(&scene.mesh.material)
+            .filter(|(_, m)| {
+                scene
+                    .materials
+                    .get(**m as usize)
+                    .is_some_and(|(_, mat)| mat.is_translucent())
+            })
+            .map(|(p, _)| *p)
+            .collect();
+        if pts.is_empty() {
+            return (Vec3::ZERO, 1.0);
+        }
+        let (lo, hi) = pts.iter().fold(
+            (Vec3::splat(f32::MAX), Vec3::splat(f32::MIN)),
+            |(a, b), p| (a.min(*p), b.max(*p)),
+        );
+        let centre = 0.5 * (lo + hi);
+        let radius = pts
+            .iter()
+            .map(|p| p.distance(centre))
+            .fold(0.0, f32::max)
+            .max(1e-3);
+        (centre, radius * 1.01)
+    }
+
     pub fn name(&self) -> &str {
         &self.file.name
     }

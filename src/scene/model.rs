@@ -29,7 +29,7 @@ pub fn scene_of_model(path: &Path, folder: &Folder) -> Result<Scene, SceneError>
         mesh: file_name.clone(),
         message,
     };
-    let loaded = build::load_model(path, folder).map_err(fail)?;
+    let mut loaded = build::load_model(path, folder).map_err(fail)?;
     let (lo, hi) = bounds(&loaded);
     let (mut file, lights) = match &loaded {
         Loaded::Gltf(g) => {
@@ -109,6 +109,10 @@ pub fn scene_of_model(path: &Path, folder: &Folder) -> Result<Scene, SceneError>
         file.objects[0].material = "surface".into();
     }
     file.lights = lights;
+    // The file's lights are in the scene already (scaled, the key one taken out).
+    if let Loaded::Gltf(g) = &mut loaded {
+        g.lights.clear();
+    }
     let json = serde_json::to_string(&file).map_err(|e| fail(e.to_string()))?;
     let base = path.parent().unwrap_or(folder.root());
     build::build_with(
@@ -134,7 +138,7 @@ fn scene_file(name: &str, mm_per_unit: f64, light: Light, camera: Camera) -> Sce
         name: name.to_string(),
         description: format!("{name}, as loaded from its file"),
         mm_per_unit,
-        ambient: 0.05,
+        ambient: 0.1,
         background_srgb: [38, 42, 50],
         light,
         camera,

@@ -9,6 +9,10 @@ use glam::Vec3;
 
 use super::{Material, Scene};
 
+/// Photon map side (the renderer's photon pass uses this): 64² photons over the translucent
+/// objects' bounding sphere.
+pub const PHOTON_MAP_SIDE: u32 = 64;
+
 /// When the light-space photon pyramid is (re)built.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum Pyramid {
@@ -29,8 +33,12 @@ pub struct MaterialPlan {
     pub reach_mm: f64,
     /// What one pixel covers (mm) on the nearest object using this material.
     pub footprint_mm: f64,
+    /// Spacing of the photons (mm): light that spreads less than this shows them as dots.
+    pub photon_spacing_mm: f64,
     /// Shade with the subsurface rungs (false: opaque BRDF, at the dipole's total reflectance).
     pub subsurface: bool,
+    /// The interface: (roughness, metallic, double-sided); `None` for emitters.
+    pub surface: Option<(f64, f64, bool)>,
 }
 
 #[derive(Debug, Clone, PartialEq)]
@@ -45,6 +53,31 @@ pub struct Plan {
     pub radiosity: bool,
     /// Why radiosity is on or off, for the printout.
     pub radiosity_reason: String,
+    /// The key light's shadow pass, and why.
+    pub shadows: bool,
+    pub shadow_reason: String,
+    /// Extra punctual lights by kind: directional, point, spot.
+    pub extra_lights: [usize; 3],
+}
+
+/// Whether the key light needs a shadow map: it shines, and something can stand between it and
+/// a surface (a single flat object cannot shadow itself).
+fn shadows(scene: &Scene) -> (bool, String) {
+    if scene.file.light.intensity <= 0.0 {
+        return (false, "off (the key light is off)".into());
+    }
+    let first = scene.mesh.normals.first().copied().unwrap_or(Vec3::Y);
+    let flat = scene.placed.len() == 1 && scene.mesh.normals.iter().all(|n| n.dot(first) > 0.9999);
+    if flat {
+        return (
+            false,
+            "off (a single flat surface cannot shadow itself)".into(),
+        );
+    }
+    (
+        true,
+        "on (the key light's shadow map, 3×3 tent PCF, normal-offset and depth bias)".into(),
+    )
 }
 
 /// Auto mode turns radiosity on when at least this share of directions from the scene's centre
@@ -101,6 +134,9 @@ impl Plan {
         let mm_per_pixel_per_unit = 2.0 * (f64::from(cam.fov_y_deg).to_radians() / 2.0).tan()
             / f64::from(height.max(1))
             * scene.file.mm_per_unit;
+        let (_, radius) = scene.translucent_bounds();
+        let photon_spacing_mm =
+            2.0 * f64::from(radius) * scene.file.mm_per_unit / f64::from(PHOTON_MAP_SIDE);
         let materials: Vec<MaterialPlan> = scene
             .materials
             .iter()
@@ -124,8 +160,13 @@ impl Plan {
                     emitter: matches!(m, Material::Emitter { .. }),
                     reach_mm,
                     footprint_mm,
+                    photon_spacing_mm,
                     subsurface: matches!(m, Material::Translucent { .. })
-                        && reach_mm >= footprint_mm,
+                        && reach_mm >= footprint_mm
+                        && reach_mm >= photon_spacing_mm,
+                    surface: m
+                        .surface()
+                        .map(|s| (s.roughness, s.metallic, s.double_sided)),
                 }
             })
             .collect();
@@ -139,6 +180,15 @@ impl Plan {
                 orbit_deg_per_s: orbit,
             },
         };
+        let (shadows, shadow_reason) = shadows(scene);
+        let mut extra_lights = [0; 3];
+        for l in &scene.file.lights {
+            extra_lights[match l {
+                super::LightSpec::Directional { .. } => 0,
+                super::LightSpec::Point { .. } => 1,
+                super::LightSpec::Spot { .. } => 2,
+            }] += 1;
+        }
         Plan {
             scene: scene.name().to_string(),
             width,
@@ -148,6 +198,9 @@ impl Plan {
             pyramid,
             radiosity,
             radiosity_reason,
+            shadows,
+            shadow_reason,
+            extra_lights,
         }
     }
 
@@ -165,20 +218,38 @@ impl fmt::Display for Plan {
             self.scene, self.width, self.height
         )?;
         for m in &self.materials {
+            let interface = match m.surface {
+                Some((r, metal, two)) => format!(
+                    "GGX specular (roughness {r:.2}{}){}",
+                    if metal > 0.0 {
+                        format!(", metallic {metal:.2}")
+                    } else {
+                        String::new()
+                    },
+                    if two { ", double-sided" } else { "" }
+                ),
+                None => String::new(),
+            };
             if m.emitter {
                 writeln!(f, "  material {:?}: area light", m.name)?;
             } else if !m.translucent {
-                writeln!(f, "  material {:?}: opaque BRDF", m.name)?;
+                writeln!(f, "  material {:?}: opaque: Lambert + {interface}", m.name)?;
             } else if m.subsurface {
                 writeln!(
                     f,
-                    "  material {:?}: subsurface scattering (light spreads {:.2} mm, a pixel covers {:.2} mm)",
+                    "  material {:?}: subsurface scattering, every rung (light spreads {:.2} mm, a pixel covers {:.2} mm), under a rough interface: {interface}",
                     m.name, m.reach_mm, m.footprint_mm
+                )?;
+            } else if m.reach_mm < m.photon_spacing_mm && m.reach_mm >= m.footprint_mm {
+                writeln!(
+                    f,
+                    "  material {:?}: translucent, but light spreads {:.2} mm < the photons' spacing ({:.2} mm), which would show as dots: rung opaque only + {interface}",
+                    m.name, m.reach_mm, m.photon_spacing_mm
                 )?;
             } else {
                 writeln!(
                     f,
-                    "  material {:?}: translucent, but light spreads {:.2} mm < one pixel ({:.2} mm): opaque BRDF at its total diffuse reflectance",
+                    "  material {:?}: translucent, but light spreads {:.2} mm < one pixel ({:.2} mm): rung opaque only (its total diffuse reflectance) + {interface}",
                     m.name, m.reach_mm, m.footprint_mm
                 )?;
             }
@@ -189,6 +260,13 @@ impl fmt::Display for Plan {
             Pyramid::EveryFrame { orbit_deg_per_s } => {
                 writeln!(f, "  light-space photon pass + quad-tree pyramid: rebuilt every frame (light orbits {orbit_deg_per_s}°/s)")?
             }
+        }
+        writeln!(f, "  shadows: {}", self.shadow_reason)?;
+        let [d, p, s] = self.extra_lights;
+        if d + p + s == 0 {
+            writeln!(f, "  extra lights: none (the key light alone)")?;
+        } else {
+            writeln!(f, "  extra lights: {d} directional, {p} point, {s} spot: diffuse + specular, unshadowed (shadows and photons come from the key light)")?;
         }
         writeln!(f, "  radiosity: {}", self.radiosity_reason)
     }
@@ -277,7 +355,7 @@ mod tests {
         assert!(skin.translucent && !skin.subsurface, "{p}");
         assert!(p
             .to_string()
-            .contains("opaque BRDF at its total diffuse reflectance"));
+            .contains("rung opaque only (its total diffuse reflectance)"));
         // At full HD the same material needs its subsurface light.
         let hd = Plan::of(&Scene::builtin("materials").unwrap(), 1920, 1080);
         assert!(

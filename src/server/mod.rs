@@ -73,6 +73,8 @@ pub struct ServerOptions {
     pub stall_timeout: Duration,
     /// Close a socket that has not said hello this long after opening.
     pub hello_timeout: Duration,
+    /// The scenes clients may name (the renderer must have the same catalog).
+    pub catalog: crate::scene::Catalog,
 }
 
 impl Default for ServerOptions {
@@ -82,6 +84,7 @@ impl Default for ServerOptions {
             max_sessions: 16,
             stall_timeout: Duration::from_secs(10),
             hello_timeout: Duration::from_secs(5),
+            catalog: crate::scene::Catalog::builtin(),
         }
     }
 }
@@ -104,15 +107,24 @@ pub async fn run_with(
     if let Some(dir) = &options.record_dir {
         std::fs::create_dir_all(dir)?;
     }
-    let scenes = crate::scene::builtin_names()
+    // Every scene is loaded once here, so a broken file is reported at start-up (and left out)
+    // rather than when a client first asks for it.
+    let scenes = options
+        .catalog
+        .names()
         .into_iter()
-        .filter_map(|name| match crate::scene::Scene::builtin(name) {
-            Ok(s) => Some(SceneInfo {
-                name: name.to_string(),
-                triangles: s.mesh.triangle_count(),
-            }),
+        .filter_map(|name| match options.catalog.load(&name) {
+            Ok(s) => {
+                for note in &s.notes {
+                    tracing::info!(scene = %name, "{note}");
+                }
+                Some(SceneInfo {
+                    triangles: s.mesh.triangle_count(),
+                    name,
+                })
+            }
             Err(e) => {
-                tracing::error!("built-in scene {name} does not load: {e}");
+                tracing::error!("scene {name} does not load and is not offered: {e}");
                 None
             }
         })

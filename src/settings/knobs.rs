@@ -137,6 +137,10 @@ macro_rules! knobs {
 knobs! {
     /// Radiosity's interreflected light on (default) or off (area lights' direct light only).
     indirect: bool, "bool", Render => |s, v| s.render.indirect = v;
+    /// Shadows from the key light on (default) or off.
+    shadows: bool, "bool", Render => |s, v| s.render.shadows = v;
+    /// Specular reflection on (default) or off (Lambert, and no interface on translucent media).
+    specular: bool, "bool", Render => |s, v| s.render.specular = v;
     /// Foveated sampling on or off (off: every pixel shaded).
     foveation: bool, "bool", Render => |s, v| s.render.foveation.enabled = v;
     /// MAR slope m, degrees of MAR per degree of eccentricity.
@@ -218,7 +222,7 @@ mod tests {
     fn every_knob_round_trips_through_the_wire_form() {
         // A patch with every knob set serialises to exactly the names KNOBS lists.
         let json = serde_json::json!({
-            "indirect": false, "foveation": true, "mar_slope": 0.03, "mar_w0_deg": 0.02,
+            "indirect": false, "shadows": false, "specular": false, "foveation": true, "mar_slope": 0.03, "mar_w0_deg": 0.02,
             "min_probability": 0.2, "probability": "linear", "saliency": false, "motion": false,
             "noise": "white", "reprojection": false, "max_history_age": 4,
             "reconstruction": "nearest", "sibson_window": 3, "compaction": false,

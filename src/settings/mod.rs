@@ -240,6 +240,13 @@ pub struct RenderSettings {
     /// read as on.
     #[serde(default = "yes")]
     pub indirect: bool,
+    /// The key light casts shadows (shadow map); off for comparison and cost.
+    #[serde(default = "yes")]
+    pub shadows: bool,
+    /// Surfaces reflect specularly (GGX) and translucent ones lose what their interface
+    /// reflects; off: Lambert and a boundary that lets all light through.
+    #[serde(default = "yes")]
+    pub specular: bool,
 }
 
 fn yes() -> bool {
@@ -307,6 +314,8 @@ impl RenderSettings {
             dof: false,
             overlay: Overlay::None,
             indirect: true,
+            shadows: true,
+            specular: true,
         }
     }
 }

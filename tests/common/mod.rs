@@ -31,7 +31,8 @@ impl Running {
 }
 
 pub async fn start(options: ServerOptions) -> (SocketAddr, Running) {
-    let renderer = Renderer::new().unwrap_or_else(|e| panic!("GPU tests need an adapter: {e}"));
+    let mut renderer = Renderer::new().unwrap_or_else(|e| panic!("GPU tests need an adapter: {e}"));
+    renderer.set_catalog(options.catalog.clone());
     let (render, thread) = RenderThread::spawn(renderer).unwrap();
     let listener = tokio::net::TcpListener::bind("127.0.0.1:0").await.unwrap();
     let addr = listener.local_addr().unwrap();

@@ -36,13 +36,15 @@ pub struct Vertex {
     normal: [f32; 3],
     blurred_normal: [f32; 3],
     material: u32,
+    /// Linear RGBA base-colour tint, 8 bits per channel.
+    tint: [u8; 4],
 }
 
 /// The vertex layout the G-buffer and photon passes share.
 pub const VERTEX_LAYOUT: wgpu::VertexBufferLayout<'static> = wgpu::VertexBufferLayout {
     array_stride: std::mem::size_of::<Vertex>() as u64,
     step_mode: wgpu::VertexStepMode::Vertex,
-    attributes: &wgpu::vertex_attr_array![0 => Float32x3, 1 => Float32x3, 2 => Float32x3, 3 => Uint32],
+    attributes: &wgpu::vertex_attr_array![0 => Float32x3, 1 => Float32x3, 2 => Float32x3, 3 => Uint32, 6 => Unorm8x4],
 };
 
 /// A scene's mesh on the GPU.
@@ -75,14 +77,9 @@ fn pipeline(
     module: &wgpu::ShaderModule,
 ) -> wgpu::RenderPipeline {
     let targets = [NORMAL_DISTANCE, ALBEDO, BLURRED_NORMAL, IRRADIANCE];
-    mesh_pipeline(
-        device,
-        PASS.label,
-        layout,
-        module,
-        &targets,
-        Some(wgpu::Face::Back),
-    )
+    // No culling here: the fragment shader culls per material (double-sided ones keep their
+    // back faces).
+    mesh_pipeline(device, PASS.label, layout, module, &targets, None)
 }
 
 /// A pipeline that rasterises the scene mesh (`vs_main`/`fs_main`, the mesh and radiosity
@@ -204,6 +201,7 @@ pub fn upload(device: &wgpu::Device, scene: &Scene) -> MeshBuffers {
             normal: mesh.normals[i].to_array(),
             blurred_normal: mesh.blurred_normals[i].to_array(),
             material: mesh.material[i],
+            tint: mesh.tint[i].map(|c| (c.clamp(0.0, 1.0) * 255.0).round() as u8),
         })
         .collect();
     let label = Some(scene.name());

@@ -13,3 +13,4 @@ pub mod resolve;
 pub mod sampling;
 pub mod screen_diffusion;
 pub mod shade;
+pub mod shadow;

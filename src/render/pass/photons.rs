@@ -14,7 +14,7 @@ use crate::scene::Scene;
 
 /// Photon map side: 64² photons. Light spreads millimetres in the shipped media, and a bunny
 /// texel covers ~1.6 mm, so finer maps add cost, not detail (measured in the bench).
-pub const SIDE: u32 = 64;
+pub const SIDE: u32 = crate::scene::plan::PHOTON_MAP_SIDE;
 /// Levels 64, 32, …, 1.
 pub const LEVELS: u32 = 7;
 /// Traversal starts from the 4×4 level (seed 000 starts from 8×8 of a 512² map).
@@ -280,31 +280,5 @@ pub fn photon_radius_mm(scene: &Scene) -> f64 {
 
 /// Centre and radius of a sphere around every translucent vertex (scene units).
 pub fn translucent_bounds(scene: &Scene) -> (Vec3, f32) {
-    let pts: Vec<Vec3> = scene
-        .mesh
-        .positions
-        .iter()
-        .zip(&scene.mesh.material)
-        .filter(|(_, m)| {
-            scene
-                .materials
-                .get(**m as usize)
-                .is_some_and(|(_, mat)| mat.is_translucent())
-        })
-        .map(|(p, _)| *p)
-        .collect();
-    if pts.is_empty() {
-        return (Vec3::ZERO, 1.0);
-    }
-    let (lo, hi) = pts.iter().fold(
-        (Vec3::splat(f32::MAX), Vec3::splat(f32::MIN)),
-        |(a, b), p| (a.min(*p), b.max(*p)),
-    );
-    let centre = 0.5 * (lo + hi);
-    let radius = pts
-        .iter()
-        .map(|p| p.distance(centre))
-        .fold(0.0, f32::max)
-        .max(1e-3);
-    (centre, radius * 1.01)
+    scene.translucent_bounds()
 }

@@ -15,6 +15,7 @@ pub const PASS: PassDecl = PassDecl {
         read("scene.reach"),
         read("screen_diffusion.in"),
         write("screen_diffusion.out"),
+        texture("shadow.depth"),
     ],
     attachments: &[],
     entry_points: &["irradiance", "blur_horizontal", "blur_vertical"],

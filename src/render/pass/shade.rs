@@ -22,6 +22,8 @@ pub const PASS: PassDecl = PassDecl {
         read("photons.nodes"),
         read("screen_diffusion.a"),
         texture("gbuffer.irradiance"),
+        texture("shadow.depth"),
+        read("lights.scene"),
     ],
     attachments: &[],
     entry_points: &["shade_list", "shade_grid"],

@@ -3,17 +3,20 @@
 //! (`material.rs`), punctual lights and first perspective camera. Buffers and images are read
 //! through the scene folder only (no URIs, nothing outside it), with the sizes in `limits`.
 
+mod buffers;
 mod material;
+mod primitive;
 mod texture;
 
 use std::path::Path;
 
-use glam::{Mat3, Mat4, Vec2, Vec3};
+use glam::{Mat4, Vec3};
 
 use super::folder::Folder;
-use super::limits::{read_limited, MAX_FILE_BYTES, MAX_TRIANGLES, MAX_VERTICES};
-use super::mesh::push_fan;
+use super::limits::{read_limited, MAX_TRIANGLES, MAX_VERTICES};
 use super::{Camera, LightSpec, MaterialSpec, RawMesh};
+use buffers::{load_buffers, read_uri};
+use primitive::read_primitive;
 
 /// Required extensions Fovea reads (the crate's own list lacks diffuse transmission).
 const SUPPORTED: &[&str] = &[
@@ -143,7 +146,8 @@ pub fn import_bytes(bytes: &[u8], base: &Path, folder: &Folder) -> Result<Import
             .map_or_else(|| format!("material-{i}"), str::to_string);
         imported.materials.push((name, material::spec_of(&g)));
     }
-    // Primitives without a material get glTF's default (white, rough, dielectric).
+    // Primitives without a material get a white rough dielectric (glTF's default material is a
+    // rough metal, which shows black without an environment to reflect).
     let default_material = imported.materials.len();
     imported.materials.push((
         "default".into(),
@@ -291,80 +295,6 @@ fn light_spec(light: &gltf::khr_lights_punctual::Light, world: Mat4) -> LightSpe
     }
 }
 
-fn load_buffers(
-    doc: &gltf::Document,
-    blob: Option<Vec<u8>>,
-    base: &Path,
-    folder: &Folder,
-) -> Result<Vec<Vec<u8>>, GltfError> {
-    let mut blob = blob;
-    let mut out = Vec::new();
-    for b in doc.buffers() {
-        let index = b.index();
-        let err = |message: String| GltfError::Buffer { index, message };
-        if b.length() as u64 > MAX_FILE_BYTES {
-            return Err(err(format!(
-                "{} bytes is over the {MAX_FILE_BYTES}-byte limit",
-                b.length()
-            )));
-        }
-        let data = match b.source() {
-            gltf::buffer::Source::Bin => blob
-                .take()
-                .ok_or_else(|| err("the GLB has no BIN chunk".into()))?,
-            gltf::buffer::Source::Uri(uri) => read_uri(uri, base, folder).map_err(err)?,
-        };
-        if data.len() < b.length() {
-            return Err(err(format!(
-                "holds {} bytes, the file says {}",
-                data.len(),
-                b.length()
-            )));
-        }
-        out.push(data);
-    }
-    Ok(out)
-}
-
-/// A buffer or image URI: an embedded base64 `data:` URI, or a file beside the glTF.
-fn read_uri(uri: &str, base: &Path, folder: &Folder) -> Result<Vec<u8>, String> {
-    use base64::Engine;
-    if let Some(rest) = uri.strip_prefix("data:") {
-        let (_, payload) = rest
-            .split_once(";base64,")
-            .ok_or("data URI is not base64")?;
-        if payload.len() as u64 > MAX_FILE_BYTES * 4 / 3 {
-            return Err("data URI over the size limit".into());
-        }
-        return base64::engine::general_purpose::STANDARD
-            .decode(payload)
-            .map_err(|e| format!("data URI: {e}"));
-    }
-    let decoded = percent_decode(uri);
-    let path = folder.resolve(base, &decoded).map_err(|e| e.to_string())?;
-    read_limited(&path).map_err(|e| e.to_string())
-}
-
-/// URIs in glTF are percent-encoded (`my%20mesh.bin`).
-fn percent_decode(s: &str) -> String {
-    let b = s.as_bytes();
-    let mut out = Vec::with_capacity(b.len());
-    let mut i = 0;
-    while i < b.len() {
-        let hex = |c: u8| (c as char).to_digit(16);
-        if b[i] == b'%' && i + 2 < b.len() {
-            if let (Some(h), Some(l)) = (hex(b[i + 1]), hex(b[i + 2])) {
-                out.push((h * 16 + l) as u8);
-                i += 3;
-                continue;
-            }
-        }
-        out.push(b[i]);
-        i += 1;
-    }
-    String::from_utf8_lossy(&out).into_owned()
-}
-
 /// The file's textures, decoded lazily per (texture, colour space); failures become notes.
 struct Textures {
     decoded: Vec<[Option<texture::Texture>; 2]>,
@@ -427,167 +357,4 @@ impl Textures {
     fn get(&self, index: usize, srgb: bool) -> Option<&texture::Texture> {
         self.decoded.get(index)?[usize::from(!srgb)].as_ref()
     }
-}
-
-fn read_primitive(
-    prim: &gltf::Primitive,
-    buffers: &[Vec<u8>],
-    world: Mat4,
-    base_colour: Option<(&texture::Texture, u32)>,
-    material: usize,
-) -> Result<Option<Part>, String> {
-    use gltf::mesh::Mode;
-    let mode = prim.mode();
-    if !matches!(
-        mode,
-        Mode::Triangles | Mode::TriangleStrip | Mode::TriangleFan
-    ) {
-        return Ok(None);
-    }
-    let check =
-        |sem: gltf::Semantic, dims: gltf::accessor::Dimensions| -> Result<Option<usize>, String> {
-            let Some(a) = prim.get(&sem) else {
-                return Ok(None);
-            };
-            if a.count() == 0 {
-                return Err(format!("{sem:?} accessor is empty"));
-            }
-            let float = a.data_type() == gltf::accessor::DataType::F32;
-            if a.dimensions() != dims || (!float && !matches!(sem, gltf::Semantic::Colors(_))) {
-                return Err(format!(
-                    "{sem:?} is {:?} {:?}; Fovea reads float {dims:?} (dequantize the file)",
-                    a.data_type(),
-                    a.dimensions()
-                ));
-            }
-            Ok(Some(a.count()))
-        };
-    let count = check(gltf::Semantic::Positions, gltf::accessor::Dimensions::Vec3)?
-        .ok_or("no POSITION attribute")?;
-    if count > MAX_VERTICES {
-        return Err(format!(
-            "{count} vertices is over the limit of {MAX_VERTICES}"
-        ));
-    }
-    let reader = prim.reader(|b| buffers.get(b.index()).map(Vec::as_slice));
-    let local: Vec<Vec3> = reader
-        .read_positions()
-        .ok_or("POSITION data lies outside its buffer")?
-        .map(Vec3::from)
-        .collect();
-    if local.len() != count {
-        return Err("POSITION data lies outside its buffer".into());
-    }
-    let positions: Vec<Vec3> = local.iter().map(|p| world.transform_point3(*p)).collect();
-    if let Some(i) = positions.iter().position(|p| !p.is_finite()) {
-        return Err(format!("vertex {i} has a non-finite position"));
-    }
-    let normal_matrix = Mat3::from_mat4(world).inverse().transpose();
-    let normals = match check(gltf::Semantic::Normals, gltf::accessor::Dimensions::Vec3) {
-        Ok(Some(n)) if n == count => reader.read_normals().map(|it| {
-            it.map(|n| {
-                (normal_matrix * Vec3::from(n))
-                    .try_normalize()
-                    .unwrap_or(Vec3::Y)
-            })
-            .collect::<Vec<_>>()
-        }),
-        _ => None,
-    }
-    .filter(|n| n.len() == count);
-    let order: Vec<u32> = match prim.indices() {
-        Some(a) => {
-            if a.count() == 0 || a.dimensions() != gltf::accessor::Dimensions::Scalar {
-                return Err("indices must be a non-empty scalar accessor".into());
-            }
-            if a.count() > MAX_TRIANGLES * 3 {
-                return Err(format!("{} indices is over the limit", a.count()));
-            }
-            let idx: Vec<u32> = reader
-                .read_indices()
-                .ok_or("indices lie outside their buffer")?
-                .into_u32()
-                .collect();
-            if idx.len() != a.count() {
-                return Err("indices lie outside their buffer".into());
-            }
-            if let Some(bad) = idx.iter().find(|&&i| i as usize >= count) {
-                return Err(format!("index {bad} is out of range ({count} vertices)"));
-            }
-            idx
-        }
-        None => (0..count as u32).collect(),
-    };
-    let flip = world.determinant() < 0.0;
-    let mut mesh = RawMesh {
-        positions,
-        ..Default::default()
-    };
-    let tri = |a: u32, b: u32, c: u32, mesh: &mut RawMesh| {
-        let t = if flip { [a, c, b] } else { [a, b, c] };
-        let before = mesh.indices.len();
-        push_fan(&t, &mesh.positions, &mut mesh.indices);
-        if mesh.indices.len() == before {
-            mesh.dropped_degenerate += 1;
-        }
-    };
-    match mode {
-        Mode::TriangleStrip => {
-            for k in 0..order.len().saturating_sub(2) {
-                let (a, b, c) = (order[k], order[k + 1], order[k + 2]);
-                if k % 2 == 0 {
-                    tri(a, b, c, &mut mesh)
-                } else {
-                    tri(b, a, c, &mut mesh)
-                }
-            }
-        }
-        Mode::TriangleFan => {
-            for k in 1..order.len().saturating_sub(1) {
-                tri(order[0], order[k], order[k + 1], &mut mesh);
-            }
-        }
-        _ => {
-            for t in order.chunks_exact(3) {
-                tri(t[0], t[1], t[2], &mut mesh);
-            }
-        }
-    }
-    let colours: Option<Vec<[f32; 4]>> = reader
-        .read_colors(0)
-        .map(|c| c.into_rgba_f32().collect::<Vec<_>>())
-        .filter(|c| c.len() == count);
-    let uvs: Option<Vec<Vec2>> = base_colour.and_then(|(_, set)| {
-        let sem = gltf::Semantic::TexCoords(set);
-        check(sem, gltf::accessor::Dimensions::Vec2)
-            .ok()
-            .flatten()?;
-        let uv: Vec<Vec2> = reader
-            .read_tex_coords(set)?
-            .into_f32()
-            .map(Vec2::from)
-            .collect();
-        (uv.len() == count).then_some(uv)
-    });
-    let tint = match (colours, uvs, base_colour) {
-        (None, None, _) => None,
-        (c, uv, tex) => Some(
-            (0..count)
-                .map(|i| {
-                    let a = c.as_ref().map_or([1.0; 4], |c| c[i]);
-                    let b = match (&uv, tex) {
-                        (Some(uv), Some((t, _))) => t.sample(uv[i]),
-                        _ => [1.0; 4],
-                    };
-                    std::array::from_fn(|k| (a[k] * b[k]).clamp(0.0, 1.0))
-                })
-                .collect(),
-        ),
-    };
-    Ok(Some(Part {
-        mesh,
-        normals,
-        tint,
-        material,
-    }))
 }
