@@ -192,7 +192,7 @@ fn malformed_gltf_files_are_errors_that_say_what_is_wrong() {
     // Truncated and garbage binaries: errors, never panics.
     let glb = std::fs::read(concat!(
         env!("CARGO_MANIFEST_DIR"),
-        "/assets/scenes/gallery.glb"
+        "/assets/models/gallery.glb"
     ))
     .unwrap();
     for cut in [10, 100, 2000, glb.len() / 2, glb.len() - 1] {
@@ -291,7 +291,7 @@ fn explain_runs_on_every_shipped_scene() {
     for glb in ["gallery.glb", "lamps.glb"] {
         runs.push(vec![
             "--model".into(),
-            format!("{}/assets/scenes/{glb}", env!("CARGO_MANIFEST_DIR")),
+            format!("{}/assets/models/{glb}", env!("CARGO_MANIFEST_DIR")),
         ]);
     }
     for args in runs {

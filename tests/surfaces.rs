@@ -245,7 +245,7 @@ fn every_shipped_scene_renders_finite() {
         .iter()
         .map(|s| s.to_string())
         .collect();
-    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/scenes");
+    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/models");
     let folder = Folder::open(&dir).unwrap();
     for glb in ["gallery.glb", "lamps.glb"] {
         let s = Scene::load(&dir.join(glb), &folder).unwrap();
@@ -286,7 +286,7 @@ async fn a_served_folder_offers_its_scenes_by_name_and_leaves_broken_ones_out() 
     let dir = std::env::temp_dir().join(format!("fovea-served-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     std::fs::copy(
-        concat!(env!("CARGO_MANIFEST_DIR"), "/assets/scenes/lamps.glb"),
+        concat!(env!("CARGO_MANIFEST_DIR"), "/assets/models/lamps.glb"),
         dir.join("lamps.glb"),
     )
     .unwrap();

@@ -199,6 +199,12 @@ export function sendSettings(presetChanged = false) {
   expectFrame();
 }
 
+// A camera move (orbit, pan, dolly or reset); the server answers with a new frame.
+export function sendCamera(move) {
+  send({ type: 'camera', ...move });
+  expectFrame();
+}
+
 function expectFrame() {
   if (state.waitingSince == null) state.waitingSince = performance.now();
 }
@@ -255,5 +261,5 @@ for (const name of ['scene', 'size', 'preset', 'codec']) {
   if (![...sel.options].some((o) => o.value === v)) sel.add(new Option(v, v));
   sel.value = v;
 }
-bindControls({ connect, sendSettings, sendGaze, resendGaze, setAutoGaze, expectFrame });
+bindControls({ connect, sendSettings, sendGaze, resendGaze, setAutoGaze, expectFrame, sendCamera });
 connect();

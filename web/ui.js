@@ -69,6 +69,54 @@ export function drawFovea(header) {
   g.stroke();
 }
 
+// Dragging moves the camera: the left button orbits, shift or the right button pans, the
+// wheel dollies, a double-click goes back to the scene's camera. Moves are summed over an
+// animation frame and sent as one `camera` message (the gaze keeps following the pointer).
+function bindCamera(canvas, app) {
+  let drag = null;
+  let pending = null;
+  const clamp = (v, lo, hi) => Math.min(hi, Math.max(lo, v));
+  const flush = () => {
+    const m = pending;
+    pending = null;
+    if (m.orbit_deg) m.orbit_deg = m.orbit_deg.map((v) => clamp(v, -360, 360));
+    if (m.pan) m.pan = m.pan.map((v) => clamp(v, -10, 10));
+    if (m.dolly) m.dolly = clamp(m.dolly, 0.05, 20);
+    app.sendCamera(m);
+  };
+  const queue = (m) => {
+    if (!pending) {
+      pending = {};
+      requestAnimationFrame(flush);
+    }
+    for (const [k, v] of Object.entries(m)) {
+      if (k === 'dolly') pending.dolly = (pending.dolly ?? 1) * v;
+      else pending[k] = pending[k] ? pending[k].map((x, i) => x + v[i]) : v;
+    }
+  };
+  canvas.addEventListener('pointerdown', (ev) => {
+    drag = { x: ev.clientX, y: ev.clientY, pan: ev.shiftKey || ev.button === 2 };
+    try { canvas.setPointerCapture(ev.pointerId); } catch { /* synthetic pointers have no capture */ }
+  });
+  canvas.addEventListener('pointermove', (ev) => {
+    if (!drag) return;
+    const r = canvas.getBoundingClientRect();
+    const dx = (ev.clientX - drag.x) / r.height;
+    const dy = (ev.clientY - drag.y) / r.height;
+    drag.x = ev.clientX;
+    drag.y = ev.clientY;
+    if (dx === 0 && dy === 0) return;
+    queue(drag.pan ? { pan: [-dx, dy] } : { orbit_deg: [-dx * 120, dy * 120] });
+  });
+  for (const end of ['pointerup', 'pointercancel']) canvas.addEventListener(end, () => { drag = null; });
+  canvas.addEventListener('contextmenu', (ev) => ev.preventDefault());
+  canvas.addEventListener('wheel', (ev) => {
+    ev.preventDefault();
+    queue({ dolly: Math.exp(ev.deltaY * 0.001) });
+  }, { passive: false });
+  canvas.addEventListener('dblclick', () => app.sendCamera({ reset: true }));
+}
+
 export function bindControls(app) {
   const canvas = $('view');
   canvas.addEventListener('mousemove', (ev) => {
@@ -77,6 +125,7 @@ export function bindControls(app) {
     const clamp = (v) => Math.min(1, Math.max(0, v));
     app.sendGaze(clamp((ev.clientX - r.left) / r.width), clamp((ev.clientY - r.top) / r.height));
   });
+  bindCamera(canvas, app);
   controls.pupil.addEventListener('input', () => {
     $('pupil-mm').textContent = Number(controls.pupil.value).toFixed(1);
     app.resendGaze();

@@ -79,6 +79,37 @@ pub enum Codec {
 }
 
 /// One eye-tracker sample. `t_ms` is on the client's own clock; the server echoes it so the
+/// Moves the session's camera (from the scene's own). Every field is optional; they apply in
+/// the order `reset`, `pose`, `orbit_deg`, `pan`, `dolly`.
+#[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct CameraMove {
+    /// Back to the scene's camera.
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub reset: bool,
+    /// An absolute pose (field of view and clip planes stay the scene's).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub pose: Option<CameraPose>,
+    /// Degrees to turn around the target: [yaw about up, pitch], each in [-360, 360].
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub orbit_deg: Option<[f64; 2]>,
+    /// Slide across the view by [right, up] view heights, each in [-10, 10].
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub pan: Option<[f64; 2]>,
+    /// Multiply the distance to the target, in [0.05, 20].
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub dolly: Option<f64>,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct CameraPose {
+    pub eye: [f64; 3],
+    pub target: [f64; 3],
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub up: Option<[f64; 3]>,
+}
+
 /// client can compute gaze-to-display latency without synchronised clocks.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]

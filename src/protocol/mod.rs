@@ -17,7 +17,7 @@ pub use frame::{
 };
 pub use limits::{Limits, SceneFileLimits};
 pub use messages::{
-    Ack, Codec, Display, ErrorMessage, Gaze, Hello, SceneInfo, ServerMessage, Welcome,
-    PROTOCOL_VERSION,
+    Ack, CameraMove, CameraPose, Codec, Display, ErrorMessage, Gaze, Hello, SceneInfo,
+    ServerMessage, Welcome, PROTOCOL_VERSION,
 };
 pub use parse::{parse_client_message, ClientMessage};

@@ -1,7 +1,7 @@
 use serde::de::DeserializeOwned;
 use serde_json::{Map, Value};
 
-use super::{Ack, ErrorCode, Gaze, Hello, Limits, ProtocolError, PROTOCOL_VERSION};
+use super::{Ack, CameraMove, ErrorCode, Gaze, Hello, Limits, ProtocolError, PROTOCOL_VERSION};
 use crate::settings::{KnobError, SettingsPatch};
 
 /// A client message that parsed and passed every range check.
@@ -11,6 +11,7 @@ pub enum ClientMessage {
     Gaze(Gaze),
     Ack(Ack),
     Settings(SettingsPatch),
+    Camera(CameraMove),
 }
 
 /// Parses and validates one text message. Scene and preset names are checked by the session,
@@ -44,7 +45,7 @@ pub fn parse_client_message(text: &str, limits: &Limits) -> Result<ClientMessage
         None => {
             return Err(ProtocolError::new(
                 ErrorCode::MissingType,
-                "message has no `type` (expected hello, gaze, ack or settings)",
+                "message has no `type` (expected hello, gaze, ack, settings or camera)",
             ))
         }
     };
@@ -71,9 +72,16 @@ pub fn parse_client_message(text: &str, limits: &Limits) -> Result<ClientMessage
             validate_settings(&patch)?;
             Ok(ClientMessage::Settings(patch))
         }
+        "camera" => {
+            let m: CameraMove = fields(map, "camera")?;
+            validate_camera(&m)?;
+            Ok(ClientMessage::Camera(m))
+        }
         other => Err(ProtocolError::new(
             ErrorCode::UnknownType,
-            format!("unknown message type {other:?} (expected hello, gaze, ack or settings)"),
+            format!(
+                "unknown message type {other:?} (expected hello, gaze, ack, settings or camera)"
+            ),
         )),
     }
 }
@@ -156,6 +164,35 @@ fn validate_hello(h: &Hello, limits: &Limits) -> Result<(), ProtocolError> {
         1.0,
         f64::from(limits.max_in_flight),
     )?;
+    Ok(())
+}
+
+fn validate_camera(m: &CameraMove) -> Result<(), ProtocolError> {
+    let within = |name: &str, v: f64, lo: f64, hi: f64| {
+        finite(name, v)?;
+        if (lo..=hi).contains(&v) {
+            Ok(())
+        } else {
+            Err(ProtocolError::new(
+                ErrorCode::OutOfRange,
+                format!("camera.{name} = {v} is outside [{lo}, {hi}]"),
+            ))
+        }
+    };
+    if let Some(p) = &m.pose {
+        for v in p.eye.iter().chain(&p.target).chain(p.up.iter().flatten()) {
+            within("pose", *v, -1e6, 1e6)?;
+        }
+    }
+    for v in m.orbit_deg.iter().flatten() {
+        within("orbit_deg", *v, -360.0, 360.0)?;
+    }
+    for v in m.pan.iter().flatten() {
+        within("pan", *v, -10.0, 10.0)?;
+    }
+    if let Some(d) = m.dolly {
+        within("dolly", d, 0.05, 20.0)?;
+    }
     Ok(())
 }
 
@@ -275,6 +312,26 @@ mod tests {
         );
         let big = format!(r#"{{"type":"hello","scene":"{}"}}"#, "a".repeat(5000));
         assert_eq!(code(&big), ErrorCode::TooLarge);
+    }
+
+    #[test]
+    fn camera_moves_parse_and_out_of_range_ones_are_refused() {
+        let l = Limits::default();
+        let m = parse_client_message(r#"{"type":"camera","orbit_deg":[10,-5],"dolly":0.5}"#, &l);
+        assert!(
+            matches!(m, Ok(ClientMessage::Camera(c)) if c.orbit_deg == Some([10.0, -5.0]) && c.dolly == Some(0.5))
+        );
+        for bad in [
+            r#"{"type":"camera","dolly":0}"#,
+            r#"{"type":"camera","orbit_deg":[1000,0]}"#,
+            r#"{"type":"camera","pan":[0,11]}"#,
+            r#"{"type":"camera","pose":{"eye":[1e9,0,0],"target":[0,0,0]}}"#,
+        ] {
+            let e = parse_client_message(bad, &l).unwrap_err();
+            assert_eq!(e.code, ErrorCode::OutOfRange, "{bad}");
+        }
+        let e = parse_client_message(r#"{"type":"camera","zoom":2}"#, &l).unwrap_err();
+        assert_eq!(e.code, ErrorCode::BadField);
     }
 
     #[test]

@@ -70,12 +70,7 @@ pub fn scene_of_model(path: &Path, folder: &Folder) -> Result<Scene, SceneError>
                 })
                 .map(|l| l.scaled(scale))
                 .collect();
-            let camera = g.camera.map(|mut c| {
-                if !(c.far > c.near) {
-                    c.far = c.near.max(1e-3) + 100.0 * (hi - lo).length().max(1e-3);
-                }
-                c
-            });
+            let camera = g.camera.map(|c| aim(c, centre, (hi - lo).length()));
             (
                 scene_file(
                     &name,
@@ -154,6 +149,24 @@ fn scene_file(name: &str, mm_per_unit: f64, light: Light, camera: Camera) -> Sce
         lights: Vec::new(),
         radiosity: None,
     }
+}
+
+/// A glTF camera made ready to orbit: its target (glTF has none) is the point on its view
+/// axis nearest the model's centre, its up the world's +Y unless the file rolls the camera,
+/// and a missing far plane well beyond the model.
+fn aim(mut c: Camera, centre: Vec3, size: f32) -> Camera {
+    let eye = Vec3::from(c.eye);
+    let forward = (Vec3::from(c.target) - eye).normalize_or(-Vec3::Z);
+    let along = (centre - eye).dot(forward).max(2.0 * c.near.max(1e-4));
+    c.target = (eye + forward * along).into();
+    let right = forward.cross(Vec3::from(c.up));
+    if right.y.abs() < 1e-3 && forward.cross(Vec3::Y).length() > 1e-3 {
+        c.up = [0.0, 1.0, 0.0];
+    }
+    if !(c.far > c.near) {
+        c.far = c.near.max(1e-3) + 100.0 * size.max(1e-3);
+    }
+    c
 }
 
 /// Irradiance a light gives a surface facing it at `p`, in the file's units.

@@ -41,6 +41,8 @@ pub struct ServerState {
     pub limits: Limits,
     /// Scenes a `hello` may name, with their sizes for `welcome`.
     pub scenes: Vec<SceneInfo>,
+    /// Each scene's own camera, which `camera` messages start from.
+    pub cameras: std::collections::HashMap<String, crate::scene::Camera>,
     /// Session ids, unique for the server's life (logs and `welcome`).
     pub next_session: AtomicU64,
     /// Cancelled once on shutdown; every session watches it and closes its socket.
@@ -109,6 +111,7 @@ pub async fn run_with(
     }
     // Every scene is loaded once here, so a broken file is reported at start-up (and left out)
     // rather than when a client first asks for it.
+    let mut cameras = std::collections::HashMap::new();
     let scenes = options
         .catalog
         .names()
@@ -118,6 +121,7 @@ pub async fn run_with(
                 for note in &s.notes {
                     tracing::info!(scene = %name, "{note}");
                 }
+                cameras.insert(name.clone(), s.file.camera);
                 Some(SceneInfo {
                     triangles: s.mesh.triangle_count(),
                     name,
@@ -133,6 +137,7 @@ pub async fn run_with(
         render,
         limits: Limits::default(),
         scenes,
+        cameras,
         next_session: AtomicU64::new(1),
         shutdown: shutdown.clone(),
         sessions: TaskTracker::new(),

@@ -44,6 +44,8 @@ struct Session {
     /// Gaze-to-frame-sent latency, smoothed: the prediction horizon when none is set.
     latency_ms: Option<f64>,
     recorder: Option<Recorder>,
+    /// The camera as `camera` messages moved it; `None`: the scene's own.
+    camera: Option<crate::scene::Camera>,
 }
 
 pub async fn run(socket: WebSocket, state: Arc<ServerState>, id: u64) {
@@ -161,6 +163,7 @@ impl Session {
             predictor: None,
             latency_ms: None,
             recorder,
+            camera: None,
         }
     }
 
@@ -174,6 +177,7 @@ impl Session {
             let what = match msg {
                 ClientMessage::Gaze(_) => "gaze",
                 ClientMessage::Settings(_) => "settings",
+                ClientMessage::Camera(_) => "camera",
                 _ => "ack",
             };
             return Some(error(
@@ -204,6 +208,18 @@ impl Session {
                 }
                 Err(e) => Some(knob_error(e)),
             },
+            ClientMessage::Camera(m) => {
+                let scene = self.hello.as_ref().map(|h| h.scene.as_str()).unwrap_or("");
+                let base = self.state.cameras.get(scene).copied()?;
+                match moved_camera(base, self.camera.unwrap_or(base), &m) {
+                    Ok(c) => {
+                        self.camera = Some(c);
+                        pacer.on_settings(now);
+                        None
+                    }
+                    Err(message) => Some(error(ErrorCode::OutOfRange, message)),
+                }
+            }
             ClientMessage::Ack(ack) => match pacer.on_ack(ack.frame, now) {
                 Ok(()) => {
                     tracing::trace!(
@@ -313,6 +329,7 @@ impl Session {
             .unwrap_or(crate::render::DEFAULT_PUPIL_MM);
         request.display = hello.display;
         request.settings = self.settings.render.clone();
+        request.camera = self.camera;
         request.stream = self.id;
         request.time_s = self.started.map_or(0.0, |t| t.elapsed().as_secs_f64());
         Some(FrameJob {
@@ -385,4 +402,73 @@ fn error(code: ErrorCode, message: String) -> ServerMessage {
 
 fn knob_error(e: KnobError) -> ServerMessage {
     ProtocolError::from(e).into()
+}
+
+/// The camera after a `camera` message (see `protocol::CameraMove` for the order), or why not.
+fn moved_camera(
+    base: crate::scene::Camera,
+    current: crate::scene::Camera,
+    m: &crate::protocol::CameraMove,
+) -> Result<crate::scene::Camera, String> {
+    let f = |v: [f64; 3]| v.map(|x| x as f32);
+    let mut c = if m.reset { base } else { current };
+    if let Some(p) = m.pose {
+        c.eye = f(p.eye);
+        c.target = f(p.target);
+        c.up = p.up.map_or(c.up, f);
+    }
+    if let Some([yaw, pitch]) = m.orbit_deg {
+        c = c.orbit(yaw as f32, pitch as f32);
+    }
+    if let Some([dx, dy]) = m.pan {
+        c = c.pan(dx as f32, dy as f32);
+    }
+    if let Some(d) = m.dolly {
+        c = c.dolly(d as f32);
+    }
+    c.validate().map_err(|e| format!("camera: {e}"))?;
+    Ok(c)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::protocol::{CameraMove, CameraPose};
+
+    #[test]
+    fn camera_moves_apply_in_order_and_a_degenerate_pose_is_refused() {
+        let base = crate::scene::Scene::builtin("bunny").unwrap().file.camera;
+        let turned = moved_camera(
+            base,
+            base,
+            &CameraMove {
+                orbit_deg: Some([30.0, 0.0]),
+                ..Default::default()
+            },
+        )
+        .unwrap();
+        assert_ne!(turned.eye, base.eye);
+        assert_eq!(turned.target, base.target);
+        let back = moved_camera(
+            base,
+            turned,
+            &CameraMove {
+                reset: true,
+                ..Default::default()
+            },
+        )
+        .unwrap();
+        assert_eq!(back, base);
+        let on_target = CameraMove {
+            pose: Some(CameraPose {
+                eye: [1.0, 2.0, 3.0],
+                target: [1.0, 2.0, 3.0],
+                up: None,
+            }),
+            ..Default::default()
+        };
+        assert!(moved_camera(base, turned, &on_target)
+            .unwrap_err()
+            .contains("coincide"));
+    }
 }

@@ -294,3 +294,49 @@ async fn the_cornell_scene_streams_its_radiosity_preview_until_it_converges() {
     drop(page);
     f.finish();
 }
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn a_served_gltf_scene_is_offered_and_dragging_turns_its_camera() {
+    let scenes = concat!(env!("CARGO_MANIFEST_DIR"), "/assets/models");
+    let f = Fixture::start(&["--scenes", scenes]).await;
+    let page = f.page().await;
+    let offered = eval(
+        &page,
+        "[...document.getElementById('scene').options].map((o) => o.value)",
+    )
+    .await;
+    assert!(
+        offered.as_array().unwrap().iter().any(|v| v == "gallery"),
+        "the page offers the served glTF scene: {offered}"
+    );
+    let connects = eval(&page, "window.fovea.connects").await.as_u64().unwrap();
+    eval(&page, "(() => { const s = document.getElementById('scene'); s.value = 'gallery'; s.dispatchEvent(new Event('change')); return true; })()").await;
+    wait_for(
+        &page,
+        &format!("window.fovea.connects > {connects} && window.fovea.framesShown >= 1"),
+        30,
+    )
+    .await;
+    screenshot(&page, "gallery-before-drag").await;
+    const PIXELS: &str = "(() => { const c = document.getElementById('view'); const d = c.getContext('2d').getImageData(0, 0, c.width, c.height).data; let h = 0; for (let i = 0; i < d.length; i += 97) h = (h * 31 + d[i]) >>> 0; return h; })()";
+    let before = eval(&page, PIXELS).await;
+    let frame = eval(&page, "window.fovea.lastHeader.frame")
+        .await
+        .as_u64()
+        .unwrap();
+    // A left-button drag to the right: an orbit.
+    eval(&page, "(() => { const c = document.getElementById('view'); const r = c.getBoundingClientRect(); const at = (type, x) => c.dispatchEvent(new PointerEvent(type, {clientX: r.x + x * r.width, clientY: r.y + r.height / 2, pointerId: 7, button: 0, bubbles: true})); at('pointerdown', 0.3); for (let k = 1; k <= 5; k++) at('pointermove', 0.3 + 0.06 * k); at('pointerup', 0.6); return true; })()").await;
+    wait_for(
+        &page,
+        &format!("window.fovea.lastHeader.frame > {frame} && window.fovea.lastHeader.trigger === 'settings'"),
+        30,
+    )
+    .await;
+    // The newest frame answers the move; give the page a moment to draw it.
+    tokio::time::sleep(Duration::from_millis(300)).await;
+    let after = eval(&page, PIXELS).await;
+    assert_ne!(before, after, "the view turned");
+    screenshot(&page, "gallery-after-drag").await;
+    drop(page);
+    f.finish();
+}
