@@ -69,7 +69,8 @@ struct Material {
     z_r: vec4<f32>,
     z_v: vec4<f32>,
     alpha: vec4<f32>,
-    // x: GGX α (clamped ≥ optics::specular::MIN_ALPHA); y: metallic; z: a dielectric's F0.
+    // x: GGX α (clamped ≥ optics::specular::MIN_ALPHA); y: metallic; z: a dielectric's F0;
+    // w: the base colour texture's layer in `materials.textures`, −1 for none.
     surface: vec4<f32>,
     // The specular lobe's directional albedo split E(μ) = F0·A + F90·B at LOBE_TABLE values
     // of μ: entry i is (A, B) in lobe[i / 2].xy (even i) or .zw (odd i).
@@ -306,6 +307,8 @@ struct VertexIn {
     // Linear RGBA multiplying the base colour (glTF vertex colours and textures; white
     // elsewhere).
     @location(6) tint: vec4<f32>,
+    // Texture coordinates of the material's base colour texture.
+    @location(7) uv: vec2<f32>,
 }
 
 // The light-space photon pass's uniforms (src/render/pass/photons.rs PhotonUniform).

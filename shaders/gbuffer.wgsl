@@ -2,6 +2,9 @@
 // to decide, shade, reuse or reconstruct a pixel comes from here.
 
 @group(0) @binding(1) var<storage, read> materials: array<Material>;
+// Base colour textures (sRGB, mip-mapped), one layer each, and their trilinear sampler.
+@group(0) @binding(2) var material_textures: texture_2d_array<f32>;
+@group(0) @binding(3) var material_sampler: sampler;
 
 struct VertexOut {
     @builtin(position) clip: vec4<f32>,
@@ -11,6 +14,7 @@ struct VertexOut {
     @location(3) @interpolate(flat) material: u32,
     @location(4) irradiance: vec3<f32>,
     @location(5) tint: vec3<f32>,
+    @location(6) uv: vec2<f32>,
 }
 
 struct GBuffer {
@@ -35,6 +39,7 @@ fn vs_main(v: VertexIn) -> VertexOut {
     out.material = v.material;
     out.irradiance = v.gi_direct.rgb;
     out.tint = v.tint.rgb;
+    out.uv = v.uv;
     if (!has_mode(MODE_DIRECT_ONLY)) {
         out.irradiance += v.gi_indirect.rgb;
     }
@@ -47,6 +52,9 @@ fn vs_main(v: VertexIn) -> VertexOut {
 fn fs_main(in: VertexOut, @builtin(front_facing) front: bool) -> GBuffer {
     var g: GBuffer;
     let m = materials[in.material];
+    // Sampled before anything branches, so the mip level's derivatives are defined.
+    let layer = m.surface.w;
+    let texel = textureSample(material_textures, material_sampler, in.uv, i32(max(layer, 0.0)));
     if (!front && m.double_sided == 0u) {
         discard;
     }
@@ -66,6 +74,9 @@ fn fs_main(in: VertexOut, @builtin(front_facing) front: bool) -> GBuffer {
     var albedo = m.albedo.rgb;
     if (m.kind == 0u) {
         albedo *= in.tint;
+        if (layer >= 0.0) {
+            albedo *= texel.rgb;
+        }
     }
     g.albedo = vec4<f32>(albedo, f32(in.material + 1u) / 255.0);
     g.irradiance = vec4<f32>(in.irradiance, 0.0);

@@ -46,7 +46,11 @@ fn shader_bindings(
                     Access::Read
                 }
             }
+            (naga::AddressSpace::Handle, naga::TypeInner::Image { arrayed: true, .. }) => {
+                Access::TextureArray
+            }
             (naga::AddressSpace::Handle, naga::TypeInner::Image { .. }) => Access::Texture,
+            (naga::AddressSpace::Handle, naga::TypeInner::Sampler { .. }) => Access::Sampler,
             (space, ty) => panic!("{}: unexpected binding {space:?} {ty:?}", decl.label),
         };
         let mut used = GlobalUse::empty();

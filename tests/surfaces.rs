@@ -356,3 +356,100 @@ async fn a_served_folder_offers_its_scenes_by_name_and_leaves_broken_ones_out() 
     running.stop().await;
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+/// A PNG of `w`×1 pixels with the given RGB colours.
+fn png_row(colours: &[[u8; 3]]) -> Vec<u8> {
+    let mut out = Vec::new();
+    let mut enc = png::Encoder::new(&mut out, colours.len() as u32, 1);
+    enc.set_color(png::ColorType::Rgb);
+    let mut w = enc.write_header().unwrap();
+    w.write_image_data(&colours.concat()).unwrap();
+    drop(w);
+    out
+}
+
+#[test]
+fn a_base_colour_texture_is_sampled_per_pixel() {
+    use base64::Engine;
+    // A quad in the XY plane facing +Z, u running along x; its texture: red | blue.
+    let mut bin = Vec::new();
+    for p in [
+        [-1f32, -1.0, 0.0],
+        [1.0, -1.0, 0.0],
+        [1.0, 1.0, 0.0],
+        [-1.0, 1.0, 0.0],
+    ] {
+        for c in p {
+            bin.extend_from_slice(&c.to_le_bytes());
+        }
+    }
+    for uv in [[0f32, 1.0], [1.0, 1.0], [1.0, 0.0], [0.0, 0.0]] {
+        for c in uv {
+            bin.extend_from_slice(&c.to_le_bytes());
+        }
+    }
+    for i in [0u32, 1, 2, 0, 2, 3] {
+        bin.extend_from_slice(&i.to_le_bytes());
+    }
+    // 8 red texels then 8 blue: bilinear filtering blends only near the edges.
+    let row: Vec<[u8; 3]> = (0..16)
+        .map(|i| if i < 8 { [255, 0, 0] } else { [0, 0, 255] })
+        .collect();
+    let image = png_row(&row);
+    let image_at = bin.len();
+    bin.extend_from_slice(&image);
+    let doc = json!({
+        "asset": {"version": "2.0"},
+        "buffers": [{"byteLength": bin.len(), "uri": format!("data:application/octet-stream;base64,{}", base64::engine::general_purpose::STANDARD.encode(&bin))}],
+        "bufferViews": [
+            {"buffer": 0, "byteOffset": 0, "byteLength": 48},
+            {"buffer": 0, "byteOffset": 48, "byteLength": 32},
+            {"buffer": 0, "byteOffset": 80, "byteLength": 24},
+            {"buffer": 0, "byteOffset": image_at, "byteLength": image.len()}
+        ],
+        "accessors": [
+            {"bufferView": 0, "componentType": 5126, "count": 4, "type": "VEC3", "min": [-1, -1, 0], "max": [1, 1, 0]},
+            {"bufferView": 1, "componentType": 5126, "count": 4, "type": "VEC2"},
+            {"bufferView": 2, "componentType": 5125, "count": 6, "type": "SCALAR"}
+        ],
+        "images": [{"bufferView": 3, "mimeType": "image/png"}],
+        "samplers": [{}],
+        "textures": [{"source": 0, "sampler": 0}],
+        "materials": [{"pbrMetallicRoughness": {"baseColorTexture": {"index": 0}, "metallicFactor": 0.0, "roughnessFactor": 1.0}}],
+        "meshes": [{"primitives": [{"attributes": {"POSITION": 0, "TEXCOORD_0": 1}, "indices": 2, "material": 0}]}],
+        "nodes": [{"mesh": 0}],
+        "scenes": [{"nodes": [0]}],
+        "scene": 0
+    });
+    let dir = std::env::temp_dir().join(format!("fovea-texture-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    std::fs::write(dir.join("tile.gltf"), doc.to_string()).unwrap();
+    let scene = Scene::load(&dir.join("tile.gltf"), &Folder::open(&dir).unwrap()).unwrap();
+    assert_eq!(scene.textures.len(), 1);
+    let mut r = renderer();
+    r.add_scene(scene).unwrap();
+    let (w, h) = (80, 60);
+    let img = render(&mut r, &full("tile", w, h, 1));
+    // Mean red and blue over the covered pixels of the left and right thirds.
+    let mut sums = [[0.0f32; 2]; 2];
+    for (k, nd) in img.normal_distance.iter().enumerate() {
+        let x = k as u32 % w;
+        let side = if x < w / 3 {
+            0
+        } else if x >= 2 * w / 3 {
+            1
+        } else {
+            continue;
+        };
+        if nd[3] > 0.0 {
+            sums[side][0] += img.color[k][0];
+            sums[side][1] += img.color[k][2];
+        }
+    }
+    let [[left_r, left_b], [right_r, right_b]] = sums;
+    // White is added evenly by the specular lobe and the ambient sky; the texture decides
+    // which way each side leans.
+    assert!(left_r > 1.3 * left_b, "left third is red: {sums:?}");
+    assert!(right_b > 3.0 * right_r, "right third is blue: {sums:?}");
+    std::fs::remove_dir_all(&dir).unwrap();
+}

@@ -154,8 +154,7 @@ class Glb:
 
 
 def floor(size, tiles, cells=1):
-    """A square in XZ facing +Y, split into cells² quads (Fovea samples textures at vertices,
-    so a textured floor needs vertices finer than its texture's pattern)."""
+    """A square in XZ facing +Y, split into cells² quads."""
     h, pos, uv, idx = size / 2, [], [], []
     for j in range(cells + 1):
         for i in range(cells + 1):
@@ -214,7 +213,7 @@ def gallery(bunny):
     marble = translucent(g, "marble", [0.92, 0.90, 0.86], 0.4, [0.8, 0.76, 0.72])
     metal = g.material({"name": "gold", "pbrMetallicRoughness": {
         "baseColorFactor": [1.0, 0.78, 0.34, 1.0], "metallicFactor": 1.0, "roughnessFactor": 0.25}})
-    fp, fi, fu = floor(0.8, 6, cells=96)
+    fp, fi, fu = floor(0.8, 6)
     g.node({"mesh": g.mesh("floor", fp, fi, floor_m, fu), "translation": [0, 0, 0]})
     bunny_node(g, g.mesh("bunny", bunny[0], bunny[1], marble), -0.03, 0.0, -15.0)
     sp, si, su = sphere(0.045)

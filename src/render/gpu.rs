@@ -46,6 +46,29 @@ pub fn texture(binding: u32, sample_type: wgpu::TextureSampleType) -> wgpu::Bind
     }
 }
 
+/// A filterable `texture_2d_array<f32>` (material textures, sampled in the G-buffer pass).
+pub fn texture_array(binding: u32) -> wgpu::BindGroupLayoutEntry {
+    wgpu::BindGroupLayoutEntry {
+        binding,
+        visibility: wgpu::ShaderStages::all(),
+        ty: wgpu::BindingType::Texture {
+            sample_type: wgpu::TextureSampleType::Float { filterable: true },
+            view_dimension: wgpu::TextureViewDimension::D2Array,
+            multisampled: false,
+        },
+        count: None,
+    }
+}
+
+pub fn sampler(binding: u32) -> wgpu::BindGroupLayoutEntry {
+    wgpu::BindGroupLayoutEntry {
+        binding,
+        visibility: wgpu::ShaderStages::FRAGMENT,
+        ty: wgpu::BindingType::Sampler(wgpu::SamplerBindingType::Filtering),
+        count: None,
+    }
+}
+
 pub const FLOAT: wgpu::TextureSampleType = wgpu::TextureSampleType::Float { filterable: false };
 
 pub fn storage_buffer(binding: u32, read_only: bool) -> wgpu::BindGroupLayoutEntry {

@@ -27,6 +27,10 @@ pub enum Access {
     ReadWrite,
     /// `texture_2d<f32>` read with `textureLoad` (never filtered).
     Texture,
+    /// `texture_2d_array<f32>` sampled with filtering (material textures).
+    TextureArray,
+    /// A filtering `sampler`.
+    Sampler,
 }
 
 /// One binding of a pass: the resource (or port) name and how it is used.
@@ -64,6 +68,18 @@ pub const fn texture(name: &'static str) -> Binding {
     Binding {
         name,
         access: Access::Texture,
+    }
+}
+pub const fn texture_array(name: &'static str) -> Binding {
+    Binding {
+        name,
+        access: Access::TextureArray,
+    }
+}
+pub const fn sampler(name: &'static str) -> Binding {
+    Binding {
+        name,
+        access: Access::Sampler,
     }
 }
 
@@ -116,6 +132,8 @@ impl PassDecl {
                 Access::Read => gpu::storage_buffer(i, true),
                 Access::ReadWrite => gpu::storage_buffer(i, false),
                 Access::Texture => gpu::texture(i, gpu::FLOAT),
+                Access::TextureArray => gpu::texture_array(i),
+                Access::Sampler => gpu::sampler(i),
             })
             .collect()
     }
@@ -142,6 +160,7 @@ pub enum GraphError {
 pub enum Resource {
     Buffer(wgpu::Buffer),
     Texture(wgpu::Texture, wgpu::TextureView),
+    Sampler(wgpu::Sampler),
 }
 
 /// Named resources: one stream's targets with the scene's and the renderer's shared ones.
@@ -158,6 +177,19 @@ impl Resources {
     pub fn texture(&mut self, name: &'static str, texture: wgpu::Texture) {
         let view = gpu::view(&texture);
         self.map.insert(name, Resource::Texture(texture, view));
+    }
+
+    /// A texture bound as an array of layers (`texture_2d_array`), whatever its layer count.
+    pub fn texture_array(&mut self, name: &'static str, texture: wgpu::Texture) {
+        let view = texture.create_view(&wgpu::TextureViewDescriptor {
+            dimension: Some(wgpu::TextureViewDimension::D2Array),
+            ..Default::default()
+        });
+        self.map.insert(name, Resource::Texture(texture, view));
+    }
+
+    pub fn sampler(&mut self, name: &'static str, sampler: wgpu::Sampler) {
+        self.map.insert(name, Resource::Sampler(sampler));
     }
 
     /// Adds every resource of `other` (same names are replaced).
@@ -200,9 +232,10 @@ impl Resources {
                 name,
             };
             let resource = match (self.map.get(name).ok_or(missing)?, b.access) {
-                (Resource::Texture(_, view), Access::Texture) => {
+                (Resource::Texture(_, view), Access::Texture | Access::TextureArray) => {
                     wgpu::BindingResource::TextureView(view)
                 }
+                (Resource::Sampler(s), Access::Sampler) => wgpu::BindingResource::Sampler(s),
                 (Resource::Buffer(buf), Access::DynamicUniform { size }) => {
                     wgpu::BindingResource::Buffer(wgpu::BufferBinding {
                         buffer: buf,
@@ -210,7 +243,9 @@ impl Resources {
                         size: wgpu::BufferSize::new(size),
                     })
                 }
-                (Resource::Buffer(buf), a) if a != Access::Texture => buf.as_entire_binding(),
+                (Resource::Buffer(buf), Access::Uniform | Access::Read | Access::ReadWrite) => {
+                    buf.as_entire_binding()
+                }
                 (r, wanted) => {
                     return Err(GraphError::Kind {
                         pass: decl.label,
@@ -218,6 +253,7 @@ impl Resources {
                         found: match r {
                             Resource::Buffer(_) => "buffer",
                             Resource::Texture(..) => "texture",
+                            Resource::Sampler(_) => "sampler",
                         },
                         wanted,
                     })

@@ -18,7 +18,7 @@ pub struct GpuMaterial {
     pub z_r: [f32; 4],
     pub z_v: [f32; 4],
     pub alpha: [f32; 4],
-    /// GGX α, metallic, dielectric F0.
+    /// GGX α, metallic, dielectric F0, base colour texture layer (−1: none).
     pub surface: [f32; 4],
     /// The lobe's directional-albedo table, two (A, B) entries per vec4.
     pub lobe: [[f32; 4]; ALBEDO_TABLE / 2],
@@ -49,7 +49,14 @@ pub fn gpu_materials(scene: &Scene, plan: Option<&Plan>) -> Vec<GpuMaterial> {
         .map(|(id, (_, m))| {
             let albedo = m.albedo();
             let rgba = |v: [f64; 3]| [v[0] as f32, v[1] as f32, v[2] as f32, 0.0];
-            let (double_sided, surface, lobe) = interface(m);
+            let (double_sided, mut surface, lobe) = interface(m);
+            // The base colour texture's layer, −1 for none.
+            surface[3] = scene
+                .material_textures
+                .get(id)
+                .copied()
+                .flatten()
+                .map_or(-1.0, |layer| layer as f32);
             match m {
                 Material::Opaque { .. } => GpuMaterial {
                     albedo: rgba(albedo),

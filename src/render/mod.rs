@@ -24,6 +24,7 @@ mod renderer;
 mod request;
 mod scene_gpu;
 mod targets;
+pub mod textures;
 mod thread;
 pub mod timer;
 pub mod uniforms;

@@ -131,7 +131,13 @@ impl Renderer {
     fn insert_scene(&mut self, scene: Scene) -> Result<(), RenderError> {
         let name = scene.name().to_string();
         let d = &self.gpu.device;
-        let sg = SceneGpu::upload(d, &mut self.pipelines, &self.photon_pass, scene)?;
+        let sg = SceneGpu::upload(
+            d,
+            &self.gpu.queue,
+            &mut self.pipelines,
+            &self.photon_pass,
+            scene,
+        )?;
         if let (Some(h), Ok(mut solves)) = (&sg.radiosity, self.solves.lock()) {
             solves.retain(|s| s.scene() != name);
             solves.push(h.clone());

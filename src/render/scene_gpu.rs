@@ -27,6 +27,7 @@ pub struct SceneGpu {
 impl SceneGpu {
     pub fn upload(
         device: &wgpu::Device,
+        queue: &wgpu::Queue,
         pipelines: &mut Pipelines,
         photon_pass: &PhotonPass,
         scene: Scene,
@@ -59,6 +60,9 @@ impl SceneGpu {
         };
         resources.buffer("photons.nodes", nodes);
         resources.buffer("lights.scene", super::lights::upload(device, &scene));
+        let (textures, sampler) = super::textures::upload(device, queue, &scene);
+        resources.texture_array("materials.textures", textures);
+        resources.sampler("materials.sampler", sampler);
         let shadow = if crate::scene::Plan::of(&scene, 1, 1).shadows {
             Some(ShadowMap::new(device, pipelines)?)
         } else {

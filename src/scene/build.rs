@@ -54,6 +54,8 @@ pub fn build_with(
         materials.push((name.clone(), m));
     }
     let mut lights = file.lights.clone();
+    let mut textures = Vec::new();
+    let mut material_textures: Vec<Option<u32>> = Vec::new();
     let mut notes = Vec::new();
     let mut mesh = Mesh::default();
     let mut placed = Vec::new();
@@ -136,11 +138,17 @@ pub fn build_with(
                 // The file's own materials, named after it, unless the object overrides them.
                 let own = if object.material.is_empty() {
                     let base = materials.len();
-                    for (name, spec) in &imported.materials {
+                    let first_texture = textures.len() as u32;
+                    textures.extend(imported.textures.iter().cloned());
+                    material_textures.resize(base, None);
+                    for ((name, spec), tex) in
+                        imported.materials.iter().zip(&imported.material_textures)
+                    {
                         let m = Material::from_spec(spec).map_err(|e| {
                             invalid(format!("{} material {name:?}: {e}", object.mesh))
                         })?;
                         materials.push((format!("{}#{name}", object.mesh), m));
+                        material_textures.push(tex.map(|t| first_texture + t as u32));
                     }
                     Some(base)
                 } else {
@@ -172,6 +180,9 @@ pub fn build_with(
                     };
                     if let Some(t) = part.tint {
                         m.tint = t;
+                    }
+                    if let Some(uv) = part.uv {
+                        m.uv = uv;
                     }
                     append(
                         &mut mesh,
@@ -218,12 +229,15 @@ pub fn build_with(
         l.validate().map_err(&invalid)?;
     }
     file.lights = lights;
+    material_textures.resize(materials.len(), None);
     Ok(Scene {
         file,
         mesh,
         materials,
         placed,
         notes,
+        textures,
+        material_textures,
     })
 }
 

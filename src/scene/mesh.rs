@@ -13,6 +13,8 @@ pub struct Mesh {
     /// Linear RGBA multiplying the material's base colour per vertex (glTF vertex colours and
     /// base colour textures sampled at the vertices); white elsewhere.
     pub tint: Vec<[f32; 4]>,
+    /// Texture coordinates for the material's base colour texture (zero without one).
+    pub uv: Vec<[f32; 2]>,
     pub indices: Vec<u32>,
 }
 
@@ -46,6 +48,7 @@ impl Mesh {
             normals,
             material: vec![0; n],
             tint: vec![[1.0; 4]; n],
+            uv: vec![[0.0; 2]; n],
             indices,
         }
     }
@@ -90,6 +93,7 @@ impl Mesh {
         self.normals.extend(other.normals);
         self.blurred_normals.extend(other.blurred_normals);
         self.tint.extend(other.tint);
+        self.uv.extend(other.uv);
     }
 
     pub fn triangle_count(&self) -> u32 {

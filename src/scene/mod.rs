@@ -79,6 +79,14 @@ pub enum SceneError {
     Invalid { scene: String, message: String },
 }
 
+/// A base colour texture: sRGB-encoded RGBA8, row by row.
+#[derive(Debug, Clone, PartialEq)]
+pub struct TextureImage {
+    pub width: u32,
+    pub height: u32,
+    pub rgba: Vec<u8>,
+}
+
 /// Where an object's vertices sit in the combined mesh, and for a quad its lattice.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Placed {
@@ -104,6 +112,9 @@ pub struct Scene {
     pub placed: Vec<Placed>,
     /// What loading left out or repaired (ignored extensions, dropped triangles, …).
     pub notes: Vec<String>,
+    /// Base colour textures, and for each material the one it uses (the mesh's `uv` reads it).
+    pub textures: Vec<TextureImage>,
+    pub material_textures: Vec<Option<u32>>,
 }
 
 /// The built-in scenes' names, default first.

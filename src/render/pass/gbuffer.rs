@@ -3,7 +3,7 @@
 
 use wgpu::util::DeviceExt;
 
-use crate::render::graph::{read, uniform, GraphError, PassDecl, Recorder};
+use crate::render::graph::{read, sampler, texture_array, uniform, GraphError, PassDecl, Recorder};
 use crate::scene::Scene;
 
 pub const NORMAL_DISTANCE: wgpu::TextureFormat = wgpu::TextureFormat::Rgba32Float;
@@ -38,13 +38,15 @@ pub struct Vertex {
     material: u32,
     /// Linear RGBA base-colour tint, 8 bits per channel.
     tint: [u8; 4],
+    /// Base colour texture coordinates.
+    uv: [f32; 2],
 }
 
 /// The vertex layout the G-buffer and photon passes share.
 pub const VERTEX_LAYOUT: wgpu::VertexBufferLayout<'static> = wgpu::VertexBufferLayout {
     array_stride: std::mem::size_of::<Vertex>() as u64,
     step_mode: wgpu::VertexStepMode::Vertex,
-    attributes: &wgpu::vertex_attr_array![0 => Float32x3, 1 => Float32x3, 2 => Float32x3, 3 => Uint32, 6 => Unorm8x4],
+    attributes: &wgpu::vertex_attr_array![0 => Float32x3, 1 => Float32x3, 2 => Float32x3, 3 => Uint32, 6 => Unorm8x4, 7 => Float32x2],
 };
 
 /// A scene's mesh on the GPU.
@@ -60,7 +62,12 @@ pub const PASS: PassDecl = PassDecl {
     label: "gbuffer",
     shader: include_str!("../../../shaders/gbuffer.wgsl"),
     first_binding: 0,
-    bindings: &[uniform("frame.uniform"), read("materials.scene")],
+    bindings: &[
+        uniform("frame.uniform"),
+        read("materials.scene"),
+        texture_array("materials.textures"),
+        sampler("materials.sampler"),
+    ],
     attachments: &[
         "gbuffer.normal_distance",
         "gbuffer.albedo",
@@ -202,6 +209,7 @@ pub fn upload(device: &wgpu::Device, scene: &Scene) -> MeshBuffers {
             blurred_normal: mesh.blurred_normals[i].to_array(),
             material: mesh.material[i],
             tint: mesh.tint[i].map(|c| (c.clamp(0.0, 1.0) * 255.0).round() as u8),
+            uv: mesh.uv[i],
         })
         .collect();
     let label = Some(scene.name());

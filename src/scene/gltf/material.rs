@@ -7,7 +7,7 @@ use crate::optics::dipole::albedo_for_total_reflectance;
 use crate::scene::material::SurfaceSpec;
 use crate::scene::MaterialSpec;
 
-use super::texture::Texture;
+use crate::scene::TextureImage;
 
 /// glTF lengths are metres; dipole coefficients are per millimetre.
 const MM_PER_METRE: f64 = 1000.0;
@@ -111,6 +111,6 @@ fn medium(
 }
 
 /// The mean of a texture if it decoded (a material whose texture fails keeps its factors).
-pub fn mean(t: Option<&Texture>) -> Option<[f32; 4]> {
-    t.map(Texture::mean)
+pub fn mean(t: Option<&TextureImage>, srgb: bool) -> Option<[f32; 4]> {
+    t.map(|t| super::texture::mean(t, srgb))
 }

@@ -54,9 +54,10 @@ pub struct Part {
     pub mesh: RawMesh,
     /// The file's normals (world space), if it has them; otherwise they are computed.
     pub normals: Option<Vec<Vec3>>,
-    /// Per-vertex linear RGBA multiplying the material's base colour (COLOR_0 × base colour
-    /// texture), if either is present.
+    /// Per-vertex linear RGBA multiplying the material's base colour (COLOR_0), if present.
     pub tint: Option<Vec<[f32; 4]>>,
+    /// Texture coordinates for the material's base colour texture, if it has one.
+    pub uv: Option<Vec<[f32; 2]>>,
     /// Index into `Imported::materials`.
     pub material: usize,
 }
@@ -65,6 +66,10 @@ pub struct Part {
 pub struct Imported {
     pub parts: Vec<Part>,
     pub materials: Vec<(String, MaterialSpec)>,
+    /// Base colour texture of each material (index into `textures`).
+    pub material_textures: Vec<Option<usize>>,
+    /// Decoded base colour textures (sRGB RGBA8).
+    pub textures: Vec<crate::scene::TextureImage>,
     /// Lights in the file's photometric units (lux, candela); `scene::model` scales them.
     pub lights: Vec<LightSpec>,
     pub camera: Option<Camera>,
@@ -123,16 +128,20 @@ pub fn import_bytes(bytes: &[u8], base: &Path, folder: &Folder) -> Result<Import
     let doc = gltf::Document::from_json(root).map_err(|e| GltfError::Invalid(e.to_string()))?;
     let buffers = load_buffers(&doc, blob, base, folder)?;
     let textures = Textures::new(&doc, &buffers, base, folder, &mut imported.notes);
+    // Texture indices already added to `imported.textures`, in order.
+    let mut used: Vec<usize> = Vec::new();
     for (i, m) in doc.materials().enumerate() {
         let mr = m.pbr_metallic_roughness();
         let g = material::GltfMaterial {
             metallic_roughness_mean: material::mean(
                 mr.metallic_roughness_texture()
-                    .and_then(|t| textures.get(t.texture().index(), false)),
+                    .and_then(|t| textures.get(t.texture().index())),
+                false,
             ),
             emissive_mean: material::mean(
                 m.emissive_texture()
-                    .and_then(|t| textures.get(t.texture().index(), true)),
+                    .and_then(|t| textures.get(t.texture().index())),
+                true,
             ),
             material: m.clone(),
         };
@@ -145,10 +154,24 @@ pub fn import_bytes(bytes: &[u8], base: &Path, folder: &Folder) -> Result<Import
             .name()
             .map_or_else(|| format!("material-{i}"), str::to_string);
         imported.materials.push((name, material::spec_of(&g)));
+        let base = mr.base_color_texture().map(|t| t.texture().index());
+        let layer = base.and_then(|index| {
+            let image = textures.get(index)?;
+            Some(match used.iter().position(|&u| u == index) {
+                Some(k) => k,
+                None => {
+                    used.push(index);
+                    imported.textures.push(image.clone());
+                    imported.textures.len() - 1
+                }
+            })
+        });
+        imported.material_textures.push(layer);
     }
     // Primitives without a material get a white rough dielectric (glTF's default material is a
     // rough metal, which shows black without an environment to reflect).
     let default_material = imported.materials.len();
+    imported.material_textures.push(None);
     imported.materials.push((
         "default".into(),
         MaterialSpec::Opaque {
@@ -187,11 +210,7 @@ pub fn import_bytes(bytes: &[u8], base: &Path, folder: &Folder) -> Result<Import
                     .material()
                     .pbr_metallic_roughness()
                     .base_color_texture()
-                    .and_then(|t| {
-                        textures
-                            .get(t.texture().index(), true)
-                            .map(|x| (x, t.tex_coord()))
-                    });
+                    .and_then(|t| textures.get(t.texture().index()).map(|_| t.tex_coord()));
                 match read_primitive(&prim, &buffers, world, tex, material) {
                     Ok(Some(part)) => {
                         vertices += part.mesh.positions.len();
@@ -295,9 +314,9 @@ fn light_spec(light: &gltf::khr_lights_punctual::Light, world: Mat4) -> LightSpe
     }
 }
 
-/// The file's textures, decoded lazily per (texture, colour space); failures become notes.
+/// The file's textures that some material uses, decoded once; failures become notes.
 struct Textures {
-    decoded: Vec<[Option<texture::Texture>; 2]>,
+    decoded: Vec<Option<crate::scene::TextureImage>>,
 }
 
 impl Textures {
@@ -308,53 +327,49 @@ impl Textures {
         folder: &Folder,
         notes: &mut Vec<String>,
     ) -> Textures {
-        let used = |t: &gltf::Texture, srgb: bool| {
+        let used = |t: &gltf::Texture| {
             doc.materials().any(|m| {
                 let pbr = m.pbr_metallic_roughness();
                 let is = |i: Option<gltf::texture::Info>| {
                     i.is_some_and(|i| i.texture().index() == t.index())
                 };
-                if srgb {
-                    is(pbr.base_color_texture()) || is(m.emissive_texture())
-                } else {
-                    is(pbr.metallic_roughness_texture())
-                }
+                is(pbr.base_color_texture())
+                    || is(m.emissive_texture())
+                    || is(pbr.metallic_roughness_texture())
             })
         };
         let decoded = doc
             .textures()
             .map(|t| {
-                [true, false].map(|srgb| {
-                    if !used(&t, srgb) {
-                        return None;
+                if !used(&t) {
+                    return None;
+                }
+                let bytes = match t.source().source() {
+                    gltf::image::Source::View { view, .. } => buffers
+                        .get(view.buffer().index())
+                        .and_then(|b| {
+                            b.get(view.offset()..view.offset().checked_add(view.length())?)
+                        })
+                        .map(<[u8]>::to_vec)
+                        .ok_or_else(|| "image view out of range".to_string()),
+                    gltf::image::Source::Uri { uri, .. } => read_uri(uri, base, folder),
+                };
+                match bytes.and_then(|b| texture::decode(&b)) {
+                    Ok(t) => Some(t),
+                    Err(e) => {
+                        notes.push(format!(
+                            "texture {}: {e}; its factor is used alone",
+                            t.index()
+                        ));
+                        None
                     }
-                    let bytes = match t.source().source() {
-                        gltf::image::Source::View { view, .. } => buffers
-                            .get(view.buffer().index())
-                            .and_then(|b| {
-                                b.get(view.offset()..view.offset().checked_add(view.length())?)
-                            })
-                            .map(<[u8]>::to_vec)
-                            .ok_or_else(|| "image view out of range".to_string()),
-                        gltf::image::Source::Uri { uri, .. } => read_uri(uri, base, folder),
-                    };
-                    match bytes.and_then(|b| texture::decode(&b, srgb)) {
-                        Ok(t) => Some(t),
-                        Err(e) => {
-                            notes.push(format!(
-                                "texture {}: {e}; its factor is used alone",
-                                t.index()
-                            ));
-                            None
-                        }
-                    }
-                })
+                }
             })
             .collect();
         Textures { decoded }
     }
 
-    fn get(&self, index: usize, srgb: bool) -> Option<&texture::Texture> {
-        self.decoded.get(index)?[usize::from(!srgb)].as_ref()
+    fn get(&self, index: usize) -> Option<&crate::scene::TextureImage> {
+        self.decoded.get(index)?.as_ref()
     }
 }

@@ -1,10 +1,10 @@
 //! One glTF primitive as world-space triangles: its accessors checked (types, counts, index
 //! range, finite positions) before they are read, strips and fans triangulated, degenerate
-//! triangles dropped, vertex colours and the base colour texture folded into a tint.
+//! triangles dropped, vertex colours kept as a tint and texture coordinates for the base
+//! colour texture.
 
-use glam::{Mat3, Mat4, Vec2, Vec3};
+use glam::{Mat3, Mat4, Vec3};
 
-use super::texture;
 use super::Part;
 use crate::scene::limits::{MAX_TRIANGLES, MAX_VERTICES};
 use crate::scene::mesh::push_fan;
@@ -14,7 +14,7 @@ pub fn read_primitive(
     prim: &gltf::Primitive,
     buffers: &[Vec<u8>],
     world: Mat4,
-    base_colour: Option<(&texture::Texture, u32)>,
+    base_colour_set: Option<u32>,
     material: usize,
 ) -> Result<Option<Part>, String> {
     use gltf::mesh::Mode;
@@ -138,37 +138,34 @@ pub fn read_primitive(
         .read_colors(0)
         .map(|c| c.into_rgba_f32().collect::<Vec<_>>())
         .filter(|c| c.len() == count);
-    let uvs: Option<Vec<Vec2>> = base_colour.and_then(|(_, set)| {
+    let uv: Option<Vec<[f32; 2]>> = base_colour_set.and_then(|set| {
         let sem = gltf::Semantic::TexCoords(set);
         check(sem, gltf::accessor::Dimensions::Vec2)
             .ok()
             .flatten()?;
-        let uv: Vec<Vec2> = reader
+        let uv: Vec<[f32; 2]> = reader
             .read_tex_coords(set)?
             .into_f32()
-            .map(Vec2::from)
+            .map(|t| {
+                if t.iter().all(|x| x.is_finite()) {
+                    t
+                } else {
+                    [0.0; 2]
+                }
+            })
             .collect();
         (uv.len() == count).then_some(uv)
     });
-    let tint = match (colours, uvs, base_colour) {
-        (None, None, _) => None,
-        (c, uv, tex) => Some(
-            (0..count)
-                .map(|i| {
-                    let a = c.as_ref().map_or([1.0; 4], |c| c[i]);
-                    let b = match (&uv, tex) {
-                        (Some(uv), Some((t, _))) => t.sample(uv[i]),
-                        _ => [1.0; 4],
-                    };
-                    std::array::from_fn(|k| (a[k] * b[k]).clamp(0.0, 1.0))
-                })
-                .collect(),
-        ),
-    };
+    let tint = colours.map(|c| {
+        c.into_iter()
+            .map(|v| v.map(|x| x.clamp(0.0, 1.0)))
+            .collect()
+    });
     Ok(Some(Part {
         mesh,
         normals,
         tint,
+        uv,
         material,
     }))
 }
