@@ -7,7 +7,7 @@ texture (a PNG embedded in the BIN chunk), KHR_materials_volume / transmission /
 diffuse_transmission / ior for translucent media, KHR_lights_punctual (directional, point,
 spot) and a perspective camera.
 
-    python3 tools/make_scenes.py   # rewrites assets/models/*.glb
+    python3 tools/make_scenes.py   # rewrites assets/scenes/gallery.glb, assets/models/lamps.glb
 
 Units are metres (glTF's); light intensities are lux (directional) and candela (point, spot).
 """
@@ -273,6 +273,6 @@ if __name__ == "__main__":
     cx, cz, y0 = (min(xs) + max(xs)) / 2, (min(zs) + max(zs)) / 2, min(ys)
     k = 0.15 / (max(ys) - y0)
     bunny = ([((x - cx) * k, (y - y0) * k, (z - cz) * k) for x, y, z in bunny[0]], bunny[1])
-    out = os.path.join(ROOT, "assets", "models")
-    gallery(bunny).write(os.path.join(out, "gallery.glb"))
-    lamps(bunny).write(os.path.join(out, "lamps.glb"))
+    # The gallery is a built-in scene (the default); lamps is an example model to serve.
+    gallery(bunny).write(os.path.join(ROOT, "assets", "scenes", "gallery.glb"))
+    lamps(bunny).write(os.path.join(ROOT, "assets", "models", "lamps.glb"))

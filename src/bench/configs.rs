@@ -41,7 +41,8 @@ impl BenchConfig {
 }
 
 /// `presets`: the named presets. `rungs`: every translucency rung and cut, unfoveated.
-/// `knobs`: presets, rungs, and single-knob variations of `balanced` (MAR slope, ξ,
+/// `knobs`: presets, rungs, shadows and specular off (of `full` and `balanced`), and
+/// single-knob variations of `balanced` (MAR slope, ξ,
 /// probability form, saliency, reprojection, reconstruction, noise, compaction) and the
 /// encoder. Any other value is a comma-separated list of names from `knobs`.
 pub fn sweep(which: &str) -> Result<Vec<BenchConfig>, String> {
@@ -77,6 +78,19 @@ pub fn sweep(which: &str) -> Result<Vec<BenchConfig>, String> {
     }
     let mut knobs = presets.clone();
     knobs.extend(rungs.iter().cloned());
+    // What the surface model costs: the key light's shadows and the specular lobe, each off.
+    for preset in ["full", "balanced"] {
+        knobs.push(BenchConfig::variant_of(
+            preset,
+            format!("{preset} no-shadows"),
+            |s| s.shadows = false,
+        ));
+        knobs.push(BenchConfig::variant_of(
+            preset,
+            format!("{preset} no-specular"),
+            |s| s.specular = false,
+        ));
+    }
     for m in [0.015f32, 0.034, 0.05] {
         knobs.push(BenchConfig::variant(format!("balanced m={m}"), |s| {
             s.foveation.mar_slope = m

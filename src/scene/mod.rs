@@ -31,7 +31,14 @@ pub use ply::{parse_ply, PlyError, RawMesh};
 use glam::Vec3;
 
 /// The scene a session gets when `hello` names none.
-pub const DEFAULT_SCENE: &str = "bunny-marble";
+pub const DEFAULT_SCENE: &str = "gallery";
+
+/// Built-in scenes that are glTF models: (name, file name, the file).
+const BUILTIN_MODELS: &[(&str, &str, &[u8])] = &[(
+    "gallery",
+    "gallery.glb",
+    include_bytes!("../../assets/scenes/gallery.glb"),
+)];
 
 /// Built-in scenes: (name, scene JSON).
 const BUILTIN_SCENES: &[(&str, &str)] = &[
@@ -119,11 +126,18 @@ pub struct Scene {
 
 /// The built-in scenes' names, default first.
 pub fn builtin_names() -> Vec<&'static str> {
-    BUILTIN_SCENES.iter().map(|(n, _)| *n).collect()
+    BUILTIN_MODELS
+        .iter()
+        .map(|(n, _, _)| *n)
+        .chain(BUILTIN_SCENES.iter().map(|(n, _)| *n))
+        .collect()
 }
 
 impl Scene {
     pub fn builtin(name: &str) -> Result<Scene, SceneError> {
+        if let Some((_, file, bytes)) = BUILTIN_MODELS.iter().find(|(n, _, _)| *n == name) {
+            return model::builtin_model(name, file, bytes);
+        }
         let (_, json) = BUILTIN_SCENES
             .iter()
             .find(|(n, _)| *n == name)

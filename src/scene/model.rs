@@ -29,7 +29,34 @@ pub fn scene_of_model(path: &Path, folder: &Folder) -> Result<Scene, SceneError>
         mesh: file_name.clone(),
         message,
     };
-    let mut loaded = build::load_model(path, folder).map_err(fail)?;
+    let loaded = build::load_model(path, folder).map_err(fail)?;
+    let base = path.parent().unwrap_or(folder.root());
+    scene_of_loaded(&name, &file_name, loaded, Some((folder, base)))
+}
+
+/// A built-in glTF model (embedded, no files beside it) as a scene.
+pub fn builtin_model(name: &str, file_name: &str, bytes: &[u8]) -> Result<Scene, SceneError> {
+    let imported = super::gltf::import_bytes(bytes, Path::new(""), None).map_err(|e| {
+        SceneError::MeshFile {
+            scene: name.to_string(),
+            mesh: file_name.to_string(),
+            message: e.to_string(),
+        }
+    })?;
+    scene_of_loaded(name, file_name, Loaded::Gltf(imported), None)
+}
+
+fn scene_of_loaded(
+    name: &str,
+    file_name: &str,
+    mut loaded: Loaded,
+    at: build::Location,
+) -> Result<Scene, SceneError> {
+    let fail = |message: String| SceneError::MeshFile {
+        scene: name.to_string(),
+        mesh: file_name.to_string(),
+        message,
+    };
     let (lo, hi) = bounds(&loaded);
     let (mut file, lights) = match &loaded {
         Loaded::Gltf(g) => {
@@ -99,7 +126,7 @@ pub fn scene_of_model(path: &Path, folder: &Folder) -> Result<Scene, SceneError>
             (f, Vec::new())
         }
     };
-    file.objects[0].mesh = file_name.clone();
+    file.objects[0].mesh = file_name.to_string();
     if matches!(loaded, Loaded::Plain(_)) {
         file.objects[0].material = "surface".into();
     }
@@ -109,12 +136,7 @@ pub fn scene_of_model(path: &Path, folder: &Folder) -> Result<Scene, SceneError>
         g.lights.clear();
     }
     let json = serde_json::to_string(&file).map_err(|e| fail(e.to_string()))?;
-    let base = path.parent().unwrap_or(folder.root());
-    build::build_with(
-        &json,
-        Some((folder, base)),
-        Some((file_name.clone(), loaded)),
-    )
+    build::build_with(&json, at, Some((file_name.to_string(), loaded)))
 }
 
 use super::Scene;

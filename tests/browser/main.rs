@@ -306,18 +306,18 @@ async fn a_served_gltf_scene_is_offered_and_dragging_turns_its_camera() {
     )
     .await;
     assert!(
-        offered.as_array().unwrap().iter().any(|v| v == "gallery"),
+        offered.as_array().unwrap().iter().any(|v| v == "lamps"),
         "the page offers the served glTF scene: {offered}"
     );
     let connects = eval(&page, "window.fovea.connects").await.as_u64().unwrap();
-    eval(&page, "(() => { const s = document.getElementById('scene'); s.value = 'gallery'; s.dispatchEvent(new Event('change')); return true; })()").await;
+    eval(&page, "(() => { const s = document.getElementById('scene'); s.value = 'lamps'; s.dispatchEvent(new Event('change')); return true; })()").await;
     wait_for(
         &page,
         &format!("window.fovea.connects > {connects} && window.fovea.framesShown >= 1"),
         30,
     )
     .await;
-    screenshot(&page, "gallery-before-drag").await;
+    screenshot(&page, "lamps-before-drag").await;
     const PIXELS: &str = "(() => { const c = document.getElementById('view'); const d = c.getContext('2d').getImageData(0, 0, c.width, c.height).data; let h = 0; for (let i = 0; i < d.length; i += 97) h = (h * 31 + d[i]) >>> 0; return h; })()";
     let before = eval(&page, PIXELS).await;
     let frame = eval(&page, "window.fovea.lastHeader.frame")
@@ -336,7 +336,7 @@ async fn a_served_gltf_scene_is_offered_and_dragging_turns_its_camera() {
     tokio::time::sleep(Duration::from_millis(300)).await;
     let after = eval(&page, PIXELS).await;
     assert_ne!(before, after, "the view turned");
-    screenshot(&page, "gallery-after-drag").await;
+    screenshot(&page, "lamps-after-drag").await;
     drop(page);
     f.finish();
 }

@@ -11,7 +11,7 @@ pub fn load_buffers(
     doc: &gltf::Document,
     blob: Option<Vec<u8>>,
     base: &Path,
-    folder: &Folder,
+    folder: Option<&Folder>,
 ) -> Result<Vec<Vec<u8>>, GltfError> {
     let mut blob = blob;
     let mut out = Vec::new();
@@ -43,7 +43,7 @@ pub fn load_buffers(
 }
 
 /// A buffer or image URI: an embedded base64 `data:` URI, or a file beside the glTF.
-pub fn read_uri(uri: &str, base: &Path, folder: &Folder) -> Result<Vec<u8>, String> {
+pub fn read_uri(uri: &str, base: &Path, folder: Option<&Folder>) -> Result<Vec<u8>, String> {
     use base64::Engine;
     if let Some(rest) = uri.strip_prefix("data:") {
         let (_, payload) = rest
@@ -57,6 +57,8 @@ pub fn read_uri(uri: &str, base: &Path, folder: &Folder) -> Result<Vec<u8>, Stri
             .map_err(|e| format!("data URI: {e}"));
     }
     let decoded = percent_decode(uri);
+    // A built-in model has no folder: it must carry everything inside itself.
+    let folder = folder.ok_or("a built-in model cannot refer to files")?;
     let path = folder.resolve(base, &decoded).map_err(|e| e.to_string())?;
     read_limited(&path).map_err(|e| e.to_string())
 }

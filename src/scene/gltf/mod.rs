@@ -93,14 +93,20 @@ pub fn import(path: &Path, folder: &Folder) -> Result<Imported, GltfError> {
     let base = path.parent().unwrap_or(folder.root()).to_path_buf();
     // The gltf crate slices buffers with checked `get`s, but a malformed accessor can still
     // reach an arithmetic overflow inside it; a panic there must not take the server down.
-    std::panic::catch_unwind(|| import_bytes(&bytes, &base, folder)).unwrap_or_else(|_| {
+    std::panic::catch_unwind(|| import_bytes(&bytes, &base, Some(folder))).unwrap_or_else(|_| {
         Err(GltfError::Invalid(
             "the file's accessors are inconsistent (the reader gave up)".into(),
         ))
     })
 }
 
-pub fn import_bytes(bytes: &[u8], base: &Path, folder: &Folder) -> Result<Imported, GltfError> {
+/// Imports a glTF held in memory; its URIs resolve in `folder` (`None`: built-in, embedded
+/// data only).
+pub fn import_bytes(
+    bytes: &[u8],
+    base: &Path,
+    folder: Option<&Folder>,
+) -> Result<Imported, GltfError> {
     let invalid = |e: gltf::Error| GltfError::Invalid(e.to_string());
     let raw = gltf::Gltf::from_slice_without_validation(bytes).map_err(invalid)?;
     let mut imported = Imported::default();
@@ -324,7 +330,7 @@ impl Textures {
         doc: &gltf::Document,
         buffers: &[Vec<u8>],
         base: &Path,
-        folder: &Folder,
+        folder: Option<&Folder>,
         notes: &mut Vec<String>,
     ) -> Textures {
         let used = |t: &gltf::Texture| {
