@@ -190,13 +190,24 @@ pub fn record(f: &mut Recorder, mesh: &MeshBuffers) -> Result<(), GraphError> {
         occlusion_query_set: None,
         multiview_mask: None,
     });
-    pass.set_pipeline(&pipeline);
-    pass.set_bind_group(0, &bind_group, &[]);
+    draw_mesh(&mut pass, &pipeline, &bind_group, mesh);
+    Ok(())
+}
+
+/// Draws the whole scene mesh (with its radiosity vertex buffer) in a raster pass: what the
+/// G-buffer, photon and shadow passes each do once.
+pub fn draw_mesh(
+    pass: &mut wgpu::RenderPass,
+    pipeline: &wgpu::RenderPipeline,
+    bind_group: &wgpu::BindGroup,
+    mesh: &MeshBuffers,
+) {
+    pass.set_pipeline(pipeline);
+    pass.set_bind_group(0, bind_group, &[]);
     pass.set_vertex_buffer(0, mesh.vertices.slice(..));
     pass.set_vertex_buffer(1, mesh.gi.slice(..));
     pass.set_index_buffer(mesh.indices.slice(..), wgpu::IndexFormat::Uint32);
     pass.draw_indexed(0..mesh.index_count, 0, 0..1);
-    Ok(())
 }
 
 /// Uploads a scene's mesh (vertex, index and radiosity buffers).

@@ -188,12 +188,7 @@ impl ShadowMap {
             occlusion_query_set: None,
             multiview_mask: None,
         });
-        pass.set_pipeline(&pipeline);
-        pass.set_bind_group(0, &self.bind, &[]);
-        pass.set_vertex_buffer(0, mesh.vertices.slice(..));
-        pass.set_vertex_buffer(1, mesh.gi.slice(..));
-        pass.set_index_buffer(mesh.indices.slice(..), wgpu::IndexFormat::Uint32);
-        pass.draw_indexed(0..mesh.index_count, 0, 0..1);
+        super::gbuffer::draw_mesh(&mut pass, &pipeline, &self.bind, mesh);
         drop(pass);
         self.built_for = Some(to_light);
         Ok(())
