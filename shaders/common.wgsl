@@ -175,9 +175,27 @@ fn transmitted_always(m: Material, cos_theta: f32) -> f32 {
 
 // ---- Shadows and lights ----
 
+// The lit share of a 4×4 texel footprint around `uv` (texel units) of a map holding the
+// nearest occluder's depth or distance: each texel lit when `z` is not beyond it, weighted by a
+// 3×3 tent (bilinear weights), texels clamped into [lo, hi] (a map or an atlas tile).
+fn pcf(map: texture_2d<f32>, uv: vec2<f32>, z: f32, lo: vec2<i32>, hi: vec2<i32>) -> f32 {
+    let base = floor(uv);
+    let f = uv - base;
+    var wx = array<f32, 4>(1.0 - f.x, 1.0, 1.0, f.x);
+    var wy = array<f32, 4>(1.0 - f.y, 1.0, 1.0, f.y);
+    var lit = 0.0;
+    for (var j = 0; j < 4; j++) {
+        for (var i = 0; i < 4; i++) {
+            let t = clamp(vec2<i32>(base) + vec2<i32>(i - 1, j - 1), lo, hi);
+            lit += select(0.0, wx[i] * wy[j], z <= textureLoad(map, t, 0).x);
+        }
+    }
+    return lit / 9.0;
+}
+
 // How much of the key light reaches world point x with normal n (1 lit … 0 shadowed): the
 // shadow map tested at x moved off the surface along n, with a depth bias, over a 3×3 tent
-// (a 4×4 texel footprint, bilinear weights) so edges are soft rather than stair-stepped.
+// so edges are soft rather than stair-stepped.
 fn shadow_factor(map: texture_2d<f32>, x: vec3<f32>, n: vec3<f32>) -> f32 {
     if (has_mode(MODE_NO_SHADOWS) || frame.shadow_params.z == 0.0) {
         return 1.0;
@@ -185,21 +203,8 @@ fn shadow_factor(map: texture_2d<f32>, x: vec3<f32>, n: vec3<f32>) -> f32 {
     let p = frame.shadow_view_proj * vec4<f32>(x + n * frame.shadow_params.y, 1.0);
     let side = frame.shadow_params.w;
     let uv = vec2<f32>(p.x * 0.5 + 0.5, 0.5 - p.y * 0.5) * side - 0.5;
-    let z = p.z - frame.shadow_params.x;
-    let base = floor(uv);
-    let f = uv - base;
-    var wx = array<f32, 4>(1.0 - f.x, 1.0, 1.0, f.x);
-    var wy = array<f32, 4>(1.0 - f.y, 1.0, 1.0, f.y);
-    var lit = 0.0;
-    let last = i32(side) - 1;
-    for (var j = 0; j < 4; j++) {
-        for (var i = 0; i < 4; i++) {
-            let t = clamp(vec2<i32>(base) + vec2<i32>(i - 1, j - 1), vec2<i32>(0), vec2<i32>(last));
-            let occluder = textureLoad(map, t, 0).x;
-            lit += select(0.0, wx[i] * wy[j], z <= occluder);
-        }
-    }
-    return lit / 9.0;
+    let last = vec2<i32>(i32(side) - 1);
+    return pcf(map, uv, p.z - frame.shadow_params.x, vec2<i32>(0), last);
 }
 
 // An extra punctual light (src/render/lights.rs GpuLight).
@@ -213,6 +218,36 @@ struct PunctualLight {
     axis_cos_outer: vec4<f32>,
     // x: cos of the inner angle.
     cone: vec4<f32>,
+    // World → its tile of the spot shadow atlas.
+    view_proj: mat4x4<f32>,
+    // x: tile index, −1 unshadowed; y: a texel's size per unit distance; z: tile side.
+    shadow: vec4<f32>,
+}
+
+// How much of a spot light reaches x (normal n): its tile of `atlas` holds distances to the
+// light; the lookup moves one texel off the surface and allows 1.5 texels of bias, a texel
+// being as wide as the tile's pixels are at x's distance.
+fn spot_shadow(atlas: texture_2d<f32>, li: PunctualLight, x: vec3<f32>, n: vec3<f32>) -> f32 {
+    if (li.shadow.x < 0.0 || has_mode(MODE_NO_SHADOWS)) {
+        return 1.0;
+    }
+    let texel = li.shadow.y * distance(x, li.position_kind.xyz);
+    let xo = x + n * texel;
+    let p = li.view_proj * vec4<f32>(xo, 1.0);
+    if (p.w <= 0.0) {
+        return 1.0;
+    }
+    let ndc = p.xy / p.w;
+    if (any(abs(ndc) > vec2<f32>(1.0))) {
+        return 1.0;
+    }
+    let side = li.shadow.z;
+    let tile = u32(li.shadow.x);
+    let origin = vec2<f32>(f32(tile % 2u), f32(tile / 2u)) * side;
+    let uv = origin + vec2<f32>(ndc.x * 0.5 + 0.5, 0.5 - ndc.y * 0.5) * side - 0.5;
+    let lo = vec2<i32>(origin);
+    let z = distance(xo, li.position_kind.xyz) - 1.5 * texel;
+    return pcf(atlas, uv, z, lo, lo + vec2<i32>(i32(side) - 1));
 }
 
 // (unit vector towards the light, irradiance facing it) at x, packed as two vec4s

@@ -196,6 +196,72 @@ fn shadows_fall_where_the_roof_blocks_the_light_with_no_acne_and_no_peter_pannin
 }
 
 #[test]
+fn a_spot_light_casts_its_own_shadow() {
+    let mut r = renderer();
+    let (w, h) = (160, 120);
+    // The key light off; one spot 8 units above the floor, the roof 3 above it.
+    let scene = Scene::from_json(
+        &json!({
+            "name": "spot", "ambient": 0.0, "background_srgb": [0, 0, 0],
+            "light": {"to_light": [0, 1, 0], "color": [1, 1, 1], "intensity": 0},
+            "lights": [{"kind": "spot", "position": [0, 8, 0], "direction": [0, -1, 0],
+                        "color": [1, 1, 1], "intensity": 64, "inner_deg": 50, "outer_deg": 60}],
+            "camera": {"eye": [0, 16, 14], "target": [0, 0, 0], "fov_y_deg": 50, "near": 0.5, "far": 100},
+            "materials": {"floor": {"kind": "opaque", "albedo": [0.8, 0.8, 0.8], "roughness": 1.0}},
+            "objects": [
+                {"mesh": "plane", "material": "floor", "scale": 40.0},
+                {"mesh": "quad", "material": "floor", "corners": [[-3, 3, -3], [-3, 3, 3], [3, 3, 3], [3, 3, -3]]}
+            ]
+        })
+        .to_string(),
+    )
+    .unwrap();
+    r.add_scene(scene.clone()).unwrap();
+    let lit = render(&mut r, &{
+        let mut q = full("spot", w, h, 1);
+        q.settings.shadows = false;
+        q
+    });
+    let shadowed = render(&mut r, &full("spot", w, h, 2));
+    let eye = Vec3::from(scene.file.camera.eye);
+    let band = 0.25;
+    let (mut dark, mut open) = (0, 0);
+    for (k, nd) in shadowed.normal_distance.iter().enumerate() {
+        let x = eye + ray(&scene, w, h, k) * nd[3];
+        if nd[3] <= 0.0 || x.y.abs() > 1e-3 {
+            continue;
+        }
+        // Inside the inner cone only (full light), and away from the roof's shadow edge: the
+        // ray to the light crosses the roof's plane at 5/8 of the point's offset.
+        if (x.x * x.x + x.z * x.z).sqrt() > 8.0 * 50f32.to_radians().tan() - band {
+            continue;
+        }
+        let inside = 3.0 - (x.x.abs().max(x.z.abs()) * 5.0 / 8.0);
+        if inside.abs() < band {
+            continue;
+        }
+        let ratio = shadowed.color[k][1] / lit.color[k][1].max(1e-6);
+        if inside > 0.0 {
+            assert!(
+                ratio < 0.1,
+                "pixel {k} under the roof keeps {ratio} of the spot's light"
+            );
+            dark += 1;
+        } else {
+            assert!(
+                ratio > 0.99,
+                "pixel {k} in the spot's open light lost some: {ratio} (acne)"
+            );
+            open += 1;
+        }
+    }
+    assert!(
+        dark > 200 && open > 200,
+        "{dark} shadowed and {open} open floor pixels checked"
+    );
+}
+
+#[test]
 fn double_sided_materials_show_their_back_and_one_sided_ones_do_not() {
     let mut r = renderer();
     let (w, h) = (64, 48);

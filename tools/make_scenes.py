@@ -256,13 +256,16 @@ def lamps(bunny):
                                    ("blue", [0.25, 0.4, 1.0], [0.25, 0.22, 0.1], "point"),
                                    ("amber", [1.0, 0.75, 0.3], [0.0, 0.45, 0.3], "spot"),
                                    ("teal", [0.3, 1.0, 0.85], [0.1, 0.3, -0.35], "spot")]:
-        light = {"type": kind, "name": name, "color": colour, "intensity": 0.09 if kind == "point" else 0.35}
+        light = {"type": kind, "name": name, "color": colour, "intensity": 0.03 if kind == "point" else 0.1}
         node = {"translation": at}
         if kind == "spot":
             light["spot"] = {"innerConeAngle": 0.2, "outerConeAngle": 0.42}
             node["rotation"] = look_rotation(at, [0, 0.05, 0])
         node["light"] = g.light(light)
         g.node(node)
+    g.doc["cameras"] = [{"type": "perspective", "perspective": {"yfov": 0.7, "znear": 0.05, "zfar": 5.0}}]
+    g.node({"camera": 0, "translation": [0.0, 0.24, 0.52],
+            "rotation": look_rotation([0.0, 0.24, 0.52], [0.0, 0.05, 0.0])})
     return g
 
 

@@ -245,6 +245,7 @@ impl Renderer {
             .filter(|m| req.settings.shadows && m.built_for != Some(to_light))
         {
             let view = shadow_view(&sg.scene, to_light);
+            let spots = super::lights::shadowed_spots(&sg.scene);
             let e = enc.get_or_insert_with(encoder);
             map.build(
                 &self.gpu.queue,
@@ -252,6 +253,7 @@ impl Renderer {
                 &mut self.pipelines,
                 &sg.mesh,
                 &view,
+                &spots,
                 to_light,
                 &mut self.timer,
             )?;

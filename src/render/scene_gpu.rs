@@ -13,7 +13,8 @@ pub struct SceneGpu {
     pub scene: Scene,
     pub mesh: MeshBuffers,
     pub photons: Option<PhotonMap>,
-    /// The key light's shadow map (`shadow.depth` in `resources`), when the plan has shadows.
+    /// The key and spot lights' shadow maps (`shadow.depth`, `shadow.spots` in `resources`),
+    /// when the plan has shadows.
     pub shadow: Option<ShadowMap>,
     /// `materials.scene` (every translucent material marked subsurface, for the G-buffer and
     /// the photon map), `scene.reach`, and `photons.nodes` (a stand-in without photons).
@@ -68,24 +69,22 @@ impl SceneGpu {
         } else {
             None
         };
-        let shadow_texture = match &shadow {
-            Some(map) => map
-                .resources
-                .get_texture("shadow.depth")
-                .map(|(t, _)| t.clone()),
-            None => None,
-        };
-        // Bound in place of the map when the scene has none (the shader is told not to look).
-        let shadow_texture = shadow_texture.unwrap_or_else(|| {
-            super::gpu::texture_2d(
-                device,
-                "shadow.none",
-                (1, 1),
-                wgpu::TextureFormat::R32Float,
-                wgpu::TextureUsages::TEXTURE_BINDING,
-            )
-        });
-        resources.texture("shadow.depth", shadow_texture);
+        for name in ["shadow.depth", "shadow.spots"] {
+            let map = shadow
+                .as_ref()
+                .and_then(|m| m.resources.get_texture(name).map(|(t, _)| t.clone()));
+            // Bound in place of a map the scene has none of (the shader is told not to look).
+            let map = map.unwrap_or_else(|| {
+                super::gpu::texture_2d(
+                    device,
+                    "shadow.none",
+                    (1, 1),
+                    wgpu::TextureFormat::R32Float,
+                    wgpu::TextureUsages::TEXTURE_BINDING,
+                )
+            });
+            resources.texture(name, map);
+        }
         resources.buffer("materials.scene", materials);
         tracing::info!(scene = %scene.name(), triangles = scene.mesh.triangle_count(), translucent = scene.has_translucency(), "scene loaded");
         let radiosity = start_radiosity(&scene);

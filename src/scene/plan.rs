@@ -63,9 +63,6 @@ pub struct Plan {
 /// Whether the key light needs a shadow map: it shines, and something can stand between it and
 /// a surface (a single flat object cannot shadow itself).
 fn shadows(scene: &Scene) -> (bool, String) {
-    if scene.file.light.intensity <= 0.0 {
-        return (false, "off (the key light is off)".into());
-    }
     let first = scene.mesh.normals.first().copied().unwrap_or(Vec3::Y);
     let flat = scene.placed.len() == 1 && scene.mesh.normals.iter().all(|n| n.dot(first) > 0.9999);
     if flat {
@@ -74,11 +71,37 @@ fn shadows(scene: &Scene) -> (bool, String) {
             "off (a single flat surface cannot shadow itself)".into(),
         );
     }
+    let spots = scene
+        .file
+        .lights
+        .iter()
+        .filter(|l| matches!(l, super::LightSpec::Spot { .. }))
+        .count();
+    if scene.file.light.intensity <= 0.0 && spots == 0 {
+        return (
+            false,
+            "off (the key light is off and no spot light shines)".into(),
+        );
+    }
+    let spot_text = match spots {
+        0 => String::new(),
+        n if n <= SHADOWED_SPOTS => {
+            format!(", and each of the {n} spot lights' (perspective, 512²)")
+        }
+        n => format!(
+            ", and the first {SHADOWED_SPOTS} of the {n} spot lights' (perspective, 512²; the rest unshadowed)"
+        ),
+    };
     (
         true,
-        "on (the key light's shadow map, 3×3 tent PCF, normal-offset and depth bias)".into(),
+        format!(
+            "on: the key light's shadow map{spot_text}; 3×3 tent PCF, normal-offset and depth bias"
+        ),
     )
 }
+
+/// Spot lights that get a shadow map (the renderer's atlas has this many tiles).
+pub const SHADOWED_SPOTS: usize = 4;
 
 /// Auto mode turns radiosity on when at least this share of directions from the scene's centre
 /// meets a surface: a box open on one side (a Cornell box) is ~5/6, a bunny on a floor ~1/2.
@@ -266,7 +289,7 @@ impl fmt::Display for Plan {
         if d + p + s == 0 {
             writeln!(f, "  extra lights: none (the key light alone)")?;
         } else {
-            writeln!(f, "  extra lights: {d} directional, {p} point, {s} spot: diffuse + specular, unshadowed (shadows and photons come from the key light)")?;
+            writeln!(f, "  extra lights: {d} directional, {p} point, {s} spot: diffuse + specular; spots shadowed (see shadows), the others not; translucency's photons come from the key light only")?;
         }
         writeln!(f, "  radiosity: {}", self.radiosity_reason)
     }

@@ -24,6 +24,7 @@ pub const PASS: PassDecl = PassDecl {
         texture("gbuffer.irradiance"),
         texture("shadow.depth"),
         read("lights.scene"),
+        texture("shadow.spots"),
     ],
     attachments: &[],
     entry_points: &["shade_list", "shade_grid"],

@@ -1,7 +1,9 @@
-//! Shadow map of the key light: the whole scene rendered from the light, orthographically over
-//! the scene's bounding sphere, into a depth image the shading passes test against with a
-//! tent-filtered 3×3 PCF (`shadow_factor` in `shaders/common.wgsl`). Like the photon map it
-//! depends on geometry and light only, so it is rendered once per light direction.
+//! Shadow maps: the key light's (the whole scene rendered from the light, orthographically over
+//! the scene's bounding sphere) and up to `SPOTS` spot lights' (perspective, in the tiles of one
+//! atlas, storing the distance to the light). The shading passes test against them with a
+//! tent-filtered 3×3 PCF (`shadow_factor` and `spot_shadow` in `shaders/common.wgsl`). Like the
+//! photon map they depend on geometry and lights only, so they are rendered once per key-light
+//! direction.
 
 use glam::{Mat4, Vec3};
 
@@ -18,22 +20,39 @@ pub const SIDE: u32 = 1024;
 const DEPTH_BIAS_TEXELS: f32 = 1.5;
 /// Normal offset in texels: the lookup moves this far off the surface along its normal.
 const NORMAL_OFFSET_TEXELS: f32 = 1.0;
+/// Spot lights with a shadow map (the first ones of the scene's `lights`); more are unshadowed.
+pub const SPOTS: usize = crate::scene::plan::SHADOWED_SPOTS;
+/// Side of one spot light's tile; the atlas is 2×2 tiles.
+pub const SPOT_TILE: u32 = 512;
+/// What an empty texel holds: farther than anything (the key map stores depth in 0..1, spot
+/// tiles distances, so one clear value serves both).
+const FAR: f64 = 1e30;
 
 pub const PASS: PassDecl = PassDecl {
     label: "shadow",
     shader: include_str!("../../../shaders/shadow.wgsl"),
     first_binding: 1,
     bindings: &[uniform("shadow.uniform")],
-    attachments: &["shadow.depth", "shadow.z"],
+    attachments: &["shadow.depth", "shadow.z", "shadow.spots", "shadow.spots_z"],
     entry_points: &["vs_main", "fs_main"],
 };
 
-/// One scene's shadow map: its texture (bound by the shading passes as `shadow.depth`) and
-/// what it was rendered for.
+/// One scene's shadow maps: their textures (bound by the shading passes as `shadow.depth` and
+/// `shadow.spots`) and what they were rendered for.
 pub struct ShadowMap {
     pub resources: Resources,
-    bind: wgpu::BindGroup,
+    /// One uniform buffer and bind group per view: the key light, then each spot tile.
+    views: Vec<(wgpu::Buffer, wgpu::BindGroup)>,
     pub built_for: Option<Vec3>,
+}
+
+/// `ShadowUniform` in `shaders/shadow.wgsl`.
+#[repr(C)]
+#[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
+struct ShadowUniform {
+    light_view_proj: [[f32; 4]; 4],
+    /// xyz: the light's position; w: 1 to store the distance to it (spots), 0 for depth.
+    light_pos: [f32; 4],
 }
 
 /// The light camera and the bias values the shading passes need, for one light direction.
@@ -90,44 +109,56 @@ impl ShadowMap {
     pub fn new(device: &wgpu::Device, pipelines: &mut Pipelines) -> Result<ShadowMap, GraphError> {
         let mut r = Resources::default();
         let usage = wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::TEXTURE_BINDING;
-        r.texture(
-            "shadow.depth",
-            gpu::texture_2d(
-                device,
+        let depth = wgpu::TextureUsages::RENDER_ATTACHMENT;
+        let atlas = (2 * SPOT_TILE, 2 * SPOT_TILE);
+        for (name, size, format, usage) in [
+            (
                 "shadow.depth",
                 (SIDE, SIDE),
                 wgpu::TextureFormat::R32Float,
                 usage,
             ),
-        );
-        r.texture(
-            "shadow.z",
-            gpu::texture_2d(
-                device,
+            (
                 "shadow.z",
                 (SIDE, SIDE),
                 wgpu::TextureFormat::Depth32Float,
-                wgpu::TextureUsages::RENDER_ATTACHMENT,
+                depth,
             ),
-        );
-        r.buffer(
-            "shadow.uniform",
-            device.create_buffer(&wgpu::BufferDescriptor {
+            ("shadow.spots", atlas, wgpu::TextureFormat::R32Float, usage),
+            (
+                "shadow.spots_z",
+                atlas,
+                wgpu::TextureFormat::Depth32Float,
+                depth,
+            ),
+        ] {
+            r.texture(name, gpu::texture_2d(device, name, size, format, usage));
+        }
+        let layout = pipelines.layout(&PASS);
+        let mut views = Vec::new();
+        for _ in 0..=SPOTS {
+            let buffer = device.create_buffer(&wgpu::BufferDescriptor {
                 label: Some("shadow.uniform"),
-                size: 64,
+                size: std::mem::size_of::<ShadowUniform>() as u64,
                 usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
                 mapped_at_creation: false,
-            }),
-        );
-        let bind = r.bind(device, &pipelines.layout(&PASS), &PASS, &Routes::default())?;
+            });
+            let mut one = r.clone();
+            one.buffer("shadow.uniform", buffer.clone());
+            views.push((
+                buffer,
+                one.bind(device, &layout, &PASS, &Routes::default())?,
+            ));
+        }
         Ok(ShadowMap {
             resources: r,
-            bind,
+            views,
             built_for: None,
         })
     }
 
-    /// Renders the map for `view` (built for `to_light`).
+    /// Renders the key light's map for `view` (built for `to_light`) and the spot lights'
+    /// tiles (`spots`: view-projection and position of each, in tile order).
     #[allow(clippy::too_many_arguments)]
     pub fn build(
         &mut self,
@@ -136,6 +167,7 @@ impl ShadowMap {
         pipelines: &mut Pipelines,
         mesh: &MeshBuffers,
         view: &ShadowView,
+        spots: &[(Mat4, Vec3)],
         to_light: Vec3,
         timer: &mut PassTimer,
     ) -> Result<(), GraphError> {
@@ -143,54 +175,81 @@ impl ShadowMap {
             pass: PASS.label,
             name,
         };
-        let uniform = self
-            .resources
-            .get_buffer("shadow.uniform")
-            .ok_or(missing("shadow.uniform"))?;
-        queue.write_buffer(
-            uniform,
-            0,
-            bytemuck::bytes_of(&view.view_proj.to_cols_array_2d()),
-        );
         let target = |name| {
             self.resources
                 .get_texture(name)
-                .map(|(_, v)| v)
+                .map(|(_, v)| v.clone())
                 .ok_or(missing(name))
         };
         let pipeline = pipelines.render(&PASS, pipeline);
-        let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-            label: Some(PASS.label),
-            color_attachments: &[Some(wgpu::RenderPassColorAttachment {
-                view: target("shadow.depth")?,
-                depth_slice: None,
-                resolve_target: None,
-                ops: wgpu::Operations {
-                    // Nothing there: as far as the map reaches, so nothing is shadowed.
-                    load: wgpu::LoadOp::Clear(wgpu::Color {
-                        r: 1.0,
-                        g: 0.0,
-                        b: 0.0,
-                        a: 0.0,
-                    }),
-                    store: wgpu::StoreOp::Store,
-                },
-            })],
-            depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
-                view: target("shadow.z")?,
-                depth_ops: Some(wgpu::Operations {
-                    load: wgpu::LoadOp::Clear(1.0),
-                    store: wgpu::StoreOp::Store,
-                }),
-                stencil_ops: None,
-            }),
-            timestamp_writes: timer.render(PASS.label),
-            occlusion_query_set: None,
-            multiview_mask: None,
-        });
-        super::gbuffer::draw_mesh(&mut pass, &pipeline, &self.bind, mesh);
+        let key = ShadowUniform {
+            light_view_proj: view.view_proj.to_cols_array_2d(),
+            light_pos: [0.0; 4],
+        };
+        queue.write_buffer(&self.views[0].0, 0, bytemuck::bytes_of(&key));
+        {
+            let (colour, depth) = (target("shadow.depth")?, target("shadow.z")?);
+            let mut pass = begin(encoder, &colour, &depth, timer.render(PASS.label));
+            super::gbuffer::draw_mesh(&mut pass, &pipeline, &self.views[0].1, mesh);
+        }
+        let (colour, depth) = (target("shadow.spots")?, target("shadow.spots_z")?);
+        let mut pass = begin(encoder, &colour, &depth, None);
+        for (i, (view_proj, position)) in spots.iter().take(SPOTS).enumerate() {
+            let u = ShadowUniform {
+                light_view_proj: view_proj.to_cols_array_2d(),
+                light_pos: position.extend(1.0).to_array(),
+            };
+            queue.write_buffer(&self.views[i + 1].0, 0, bytemuck::bytes_of(&u));
+            let (x, y) = spot_tile(i);
+            let tile = SPOT_TILE as f32;
+            pass.set_viewport(x as f32, y as f32, tile, tile, 0.0, 1.0);
+            super::gbuffer::draw_mesh(&mut pass, &pipeline, &self.views[i + 1].1, mesh);
+        }
         drop(pass);
         self.built_for = Some(to_light);
         Ok(())
     }
+}
+
+/// Top-left texel of spot tile `i` in the atlas.
+pub fn spot_tile(i: usize) -> (u32, u32) {
+    ((i as u32 % 2) * SPOT_TILE, (i as u32 / 2) * SPOT_TILE)
+}
+
+/// A render pass that clears `colour` to `FAR` and `depth` to 1.
+fn begin<'e>(
+    encoder: &'e mut wgpu::CommandEncoder,
+    colour: &wgpu::TextureView,
+    depth: &wgpu::TextureView,
+    timestamps: Option<wgpu::RenderPassTimestampWrites<'e>>,
+) -> wgpu::RenderPass<'e> {
+    encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+        label: Some(PASS.label),
+        color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+            view: colour,
+            depth_slice: None,
+            resolve_target: None,
+            ops: wgpu::Operations {
+                // Nothing there: farther than anything, so nothing is shadowed.
+                load: wgpu::LoadOp::Clear(wgpu::Color {
+                    r: FAR,
+                    g: 0.0,
+                    b: 0.0,
+                    a: 0.0,
+                }),
+                store: wgpu::StoreOp::Store,
+            },
+        })],
+        depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+            view: depth,
+            depth_ops: Some(wgpu::Operations {
+                load: wgpu::LoadOp::Clear(1.0),
+                store: wgpu::StoreOp::Store,
+            }),
+            stencil_ops: None,
+        }),
+        timestamp_writes: timestamps,
+        occlusion_query_set: None,
+        multiview_mask: None,
+    })
 }
