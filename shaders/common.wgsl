@@ -72,6 +72,8 @@ struct Material {
     // x: GGX α (clamped ≥ optics::specular::MIN_ALPHA); y: metallic; z: a dielectric's F0;
     // w: the base colour texture's layer in `materials.textures`, −1 for none.
     surface: vec4<f32>,
+    // x: the normal map's layer in `materials.normal_maps`, −1 for none; y: its scale.
+    maps: vec4<f32>,
     // The specular lobe's directional albedo split E(μ) = F0·A + F90·B at LOBE_TABLE values
     // of μ: entry i is (A, B) in lobe[i / 2].xy (even i) or .zw (odd i).
     lobe: array<vec4<f32>, 8>,
@@ -342,8 +344,10 @@ struct VertexIn {
     // Linear RGBA multiplying the base colour (glTF vertex colours and textures; white
     // elsewhere).
     @location(6) tint: vec4<f32>,
-    // Texture coordinates of the material's base colour texture.
+    // Texture coordinates of the material's base colour and normal maps.
     @location(7) uv: vec2<f32>,
+    // Tangent (xyz) and bitangent sign (w) for the normal map; zero without one.
+    @location(8) tangent: vec4<f32>,
 }
 
 // The light-space photon pass's uniforms (src/render/pass/photons.rs PhotonUniform).

@@ -5,6 +5,8 @@
 // Base colour textures (sRGB, mip-mapped), one layer each, and their trilinear sampler.
 @group(0) @binding(2) var material_textures: texture_2d_array<f32>;
 @group(0) @binding(3) var material_sampler: sampler;
+// Tangent-space normal maps (linear), one layer each.
+@group(0) @binding(4) var normal_maps: texture_2d_array<f32>;
 
 struct VertexOut {
     @builtin(position) clip: vec4<f32>,
@@ -15,6 +17,7 @@ struct VertexOut {
     @location(4) irradiance: vec3<f32>,
     @location(5) tint: vec3<f32>,
     @location(6) uv: vec2<f32>,
+    @location(7) tangent: vec4<f32>,
 }
 
 struct GBuffer {
@@ -40,6 +43,7 @@ fn vs_main(v: VertexIn) -> VertexOut {
     out.irradiance = v.gi_direct.rgb;
     out.tint = v.tint.rgb;
     out.uv = v.uv;
+    out.tangent = v.tangent;
     if (!has_mode(MODE_DIRECT_ONLY)) {
         out.irradiance += v.gi_indirect.rgb;
     }
@@ -55,6 +59,7 @@ fn fs_main(in: VertexOut, @builtin(front_facing) front: bool) -> GBuffer {
     // Sampled before anything branches, so the mip level's derivatives are defined.
     let layer = m.surface.w;
     let texel = textureSample(material_textures, material_sampler, in.uv, i32(max(layer, 0.0)));
+    let bump = textureSample(normal_maps, material_sampler, in.uv, i32(max(m.maps.x, 0.0)));
     if (!front && m.double_sided == 0u) {
         discard;
     }
@@ -62,6 +67,14 @@ fn fs_main(in: VertexOut, @builtin(front_facing) front: bool) -> GBuffer {
     var n = vec3<f32>(0.0);
     if (len > 1e-20) {
         n = in.normal / len;
+    }
+    // A normal map tilts the shading normal in the tangent frame (glTF: xy scaled, z kept).
+    let tp = in.tangent.xyz - n * dot(n, in.tangent.xyz);
+    if (m.maps.x >= 0.0 && length(tp) > 1e-6 && len > 1e-20) {
+        let t = normalize(tp);
+        let b = cross(n, t) * select(-1.0, 1.0, in.tangent.w >= 0.0);
+        let tn = (bump.xyz * 2.0 - 1.0) * vec3<f32>(m.maps.y, m.maps.y, 1.0);
+        n = normalize(t * tn.x + b * tn.y + n * tn.z);
     }
     var blurred = in.blurred_normal;
     if (!front) {

@@ -435,6 +435,85 @@ fn png_row(colours: &[[u8; 3]]) -> Vec<u8> {
 }
 
 #[test]
+fn a_normal_map_tilts_the_shading_normal_towards_its_tangent() {
+    use base64::Engine;
+    // A quad in the XZ plane facing +Y, u along +x, and a flat normal map that leans every
+    // normal 45° towards +u: (1, 0, 1)/√2 encoded.
+    let mut bin = Vec::new();
+    for p in [
+        [-1f32, 0.0, 1.0],
+        [1.0, 0.0, 1.0],
+        [1.0, 0.0, -1.0],
+        [-1.0, 0.0, -1.0],
+    ] {
+        for c in p {
+            bin.extend_from_slice(&c.to_le_bytes());
+        }
+    }
+    for uv in [[0f32, 1.0], [1.0, 1.0], [1.0, 0.0], [0.0, 0.0]] {
+        for c in uv {
+            bin.extend_from_slice(&c.to_le_bytes());
+        }
+    }
+    for i in [0u32, 1, 2, 0, 2, 3] {
+        bin.extend_from_slice(&i.to_le_bytes());
+    }
+    let lean = (0.5 + 0.5 * std::f32::consts::FRAC_1_SQRT_2) * 255.0;
+    let texel = [lean.round() as u8, 128, lean.round() as u8];
+    let image = png_row(&[texel; 4]);
+    let image_at = bin.len();
+    bin.extend_from_slice(&image);
+    let doc = json!({
+        "asset": {"version": "2.0"},
+        "buffers": [{"byteLength": bin.len(), "uri": format!("data:application/octet-stream;base64,{}", base64::engine::general_purpose::STANDARD.encode(&bin))}],
+        "bufferViews": [
+            {"buffer": 0, "byteOffset": 0, "byteLength": 48},
+            {"buffer": 0, "byteOffset": 48, "byteLength": 32},
+            {"buffer": 0, "byteOffset": 80, "byteLength": 24},
+            {"buffer": 0, "byteOffset": image_at, "byteLength": image.len()}
+        ],
+        "accessors": [
+            {"bufferView": 0, "componentType": 5126, "count": 4, "type": "VEC3", "min": [-1, 0, -1], "max": [1, 0, 1]},
+            {"bufferView": 1, "componentType": 5126, "count": 4, "type": "VEC2"},
+            {"bufferView": 2, "componentType": 5125, "count": 6, "type": "SCALAR"}
+        ],
+        "images": [{"bufferView": 3, "mimeType": "image/png"}],
+        "samplers": [{}],
+        "textures": [{"source": 0, "sampler": 0}],
+        "materials": [{"normalTexture": {"index": 0}, "pbrMetallicRoughness": {"metallicFactor": 0.0}}],
+        "meshes": [{"primitives": [{"attributes": {"POSITION": 0, "TEXCOORD_0": 1}, "indices": 2, "material": 0}]}],
+        "nodes": [{"mesh": 0}],
+        "scenes": [{"nodes": [0]}],
+        "scene": 0
+    });
+    let dir = std::env::temp_dir().join(format!("fovea-normal-map-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    std::fs::write(dir.join("bumpy.gltf"), doc.to_string()).unwrap();
+    let scene = Scene::load(&dir.join("bumpy.gltf"), &Folder::open(&dir).unwrap()).unwrap();
+    std::fs::remove_dir_all(&dir).unwrap();
+    assert_eq!(scene.normal_maps.len(), 1);
+    let t = scene.mesh.tangent[0];
+    assert!(
+        (t[0] - 1.0).abs() < 1e-5 && t[3] != 0.0,
+        "tangent along +u: {t:?}"
+    );
+    let mut r = renderer();
+    r.add_scene(scene).unwrap();
+    let img = render(&mut r, &full("bumpy", 64, 48, 1));
+    let mut seen = 0;
+    for nd in img.normal_distance.iter().filter(|nd| nd[3] > 0.0) {
+        let n = Vec3::new(nd[0], nd[1], nd[2]);
+        let expected = Vec3::new(1.0, 1.0, 0.0).normalize();
+        assert!(
+            n.dot(expected) > 0.999,
+            "normal {n:?}, expected {expected:?}"
+        );
+        seen += 1;
+    }
+    assert!(seen > 100, "{seen} pixels");
+}
+
+#[test]
 fn a_base_colour_texture_is_sampled_per_pixel() {
     use base64::Engine;
     // A quad in the XY plane facing +Z, u running along x; its texture: red | blue.

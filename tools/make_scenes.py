@@ -189,6 +189,15 @@ def checker(x, y):
     return (c, c - 10, c - 30)
 
 
+def bevel(x, y):
+    """Tangent-space normal of 16-texel tiles with gently sloped 2-texel edges (grout)."""
+    u, v = x % 16, y % 16
+    nx = -0.35 if u < 2 else (0.35 if u > 13 else 0.0)
+    ny = -0.35 if v < 2 else (0.35 if v > 13 else 0.0)
+    n = math.sqrt(nx * nx + ny * ny + 1.0)
+    return tuple(int(round((c / n * 0.5 + 0.5) * 255)) for c in (nx, ny, 1.0))
+
+
 def bunny_node(g, mesh, x, z, yaw, scale=1.0):
     return g.node({"mesh": mesh, "translation": [x, 0.0, z], "rotation": quat_y(yaw),
                    "scale": [scale] * 3})
@@ -208,7 +217,8 @@ def gallery(bunny):
     """Textured floor, a marble bunny, a glossy metal sphere, key + spot + point lights."""
     g = Glb()
     tex = g.texture(png(128, 128, checker))
-    floor_m = g.material({"name": "tiles", "pbrMetallicRoughness": {
+    bumps = g.texture(png(128, 128, bevel))
+    floor_m = g.material({"name": "tiles", "normalTexture": {"index": bumps}, "pbrMetallicRoughness": {
         "baseColorTexture": {"index": tex}, "metallicFactor": 0.0, "roughnessFactor": 0.55}})
     marble = translucent(g, "marble", [0.92, 0.90, 0.86], 0.4, [0.8, 0.76, 0.72])
     metal = g.material({"name": "gold", "pbrMetallicRoughness": {

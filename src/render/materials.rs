@@ -20,6 +20,8 @@ pub struct GpuMaterial {
     pub alpha: [f32; 4],
     /// GGX α, metallic, dielectric F0, base colour texture layer (−1: none).
     pub surface: [f32; 4],
+    /// Normal map layer (−1: none), its scale.
+    pub maps: [f32; 4],
     /// The lobe's directional-albedo table, two (A, B) entries per vec4.
     pub lobe: [[f32; 4]; ALBEDO_TABLE / 2],
 }
@@ -57,12 +59,17 @@ pub fn gpu_materials(scene: &Scene, plan: Option<&Plan>) -> Vec<GpuMaterial> {
                 .copied()
                 .flatten()
                 .map_or(-1.0, |layer| layer as f32);
+            let maps = match scene.material_normal_maps.get(id).copied().flatten() {
+                Some((layer, scale)) => [layer as f32, scale, 0.0, 0.0],
+                None => [-1.0, 1.0, 0.0, 0.0],
+            };
             match m {
                 Material::Opaque { .. } => GpuMaterial {
                     albedo: rgba(albedo),
                     eta: 1.0,
                     double_sided,
                     surface,
+                    maps,
                     lobe,
                     ..Default::default()
                 },
@@ -72,6 +79,7 @@ pub fn gpu_materials(scene: &Scene, plan: Option<&Plan>) -> Vec<GpuMaterial> {
                     eta: *eta as f32,
                     double_sided,
                     surface,
+                    maps,
                     lobe,
                     albedo: rgba(albedo),
                     sigma_tr: rgba(dipole.map(|d| d.sigma_tr)),
@@ -119,7 +127,7 @@ mod tests {
     fn gpu_material_matches_the_wgsl_struct_size() {
         assert_eq!(
             std::mem::size_of::<super::GpuMaterial>(),
-            16 + 6 * 16 + 8 * 16
+            16 + 7 * 16 + 8 * 16
         );
     }
 }

@@ -1,6 +1,7 @@
-//! A scene's base colour textures on the GPU: one sRGB texture array (every image resized to
-//! the largest one's square, at most `MAX_SIDE`, with a full mip chain made here) and a
-//! trilinear, repeating sampler, read by the G-buffer pass.
+//! A scene's textures on the GPU: its base colour maps in one sRGB texture array and its normal
+//! maps in a linear one (every image resized to the largest one's square, at most `MAX_SIDE`,
+//! with a full mip chain made here), and a trilinear, repeating sampler; the G-buffer pass
+//! reads them.
 
 use wgpu::util::DeviceExt;
 
@@ -9,21 +10,43 @@ use crate::scene::{Scene, TextureImage};
 /// Largest layer side: larger images are scaled down to it.
 pub const MAX_SIDE: u32 = 2048;
 
-/// The texture array (a single white texel without textures) and its sampler.
+/// The base colour array (sRGB), the normal map array (linear) and their sampler.
 pub fn upload(
     device: &wgpu::Device,
     queue: &wgpu::Queue,
     scene: &Scene,
-) -> (wgpu::Texture, wgpu::Sampler) {
+) -> (wgpu::Texture, wgpu::Texture, wgpu::Sampler) {
+    let base = array(
+        device,
+        queue,
+        &scene.textures,
+        wgpu::TextureFormat::Rgba8UnormSrgb,
+    );
+    let normals = array(
+        device,
+        queue,
+        &scene.normal_maps,
+        wgpu::TextureFormat::Rgba8Unorm,
+    );
+    (base, normals, sampler(device))
+}
+
+/// One texture array of `images` (a single white texel when there are none).
+fn array(
+    device: &wgpu::Device,
+    queue: &wgpu::Queue,
+    images: &[TextureImage],
+    format: wgpu::TextureFormat,
+) -> wgpu::Texture {
     let white = TextureImage {
         width: 1,
         height: 1,
         rgba: vec![255; 4],
     };
-    let images: Vec<&TextureImage> = if scene.textures.is_empty() {
+    let images: Vec<&TextureImage> = if images.is_empty() {
         vec![&white]
     } else {
-        scene.textures.iter().collect()
+        images.iter().collect()
     };
     let side = images
         .iter()
@@ -49,7 +72,7 @@ pub fn upload(
             data.extend_from_slice(level.as_raw());
         }
     }
-    let texture = device.create_texture_with_data(
+    device.create_texture_with_data(
         queue,
         &wgpu::TextureDescriptor {
             label: Some("materials.textures"),
@@ -61,14 +84,17 @@ pub fn upload(
             mip_level_count: levels,
             sample_count: 1,
             dimension: wgpu::TextureDimension::D2,
-            format: wgpu::TextureFormat::Rgba8UnormSrgb,
+            format,
             usage: wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST,
             view_formats: &[],
         },
         wgpu::util::TextureDataOrder::LayerMajor,
         &data,
-    );
-    let sampler = device.create_sampler(&wgpu::SamplerDescriptor {
+    )
+}
+
+fn sampler(device: &wgpu::Device) -> wgpu::Sampler {
+    device.create_sampler(&wgpu::SamplerDescriptor {
         label: Some("materials.sampler"),
         address_mode_u: wgpu::AddressMode::Repeat,
         address_mode_v: wgpu::AddressMode::Repeat,
@@ -77,6 +103,5 @@ pub fn upload(
         mipmap_filter: wgpu::MipmapFilterMode::Linear,
         anisotropy_clamp: 8,
         ..Default::default()
-    });
-    (texture, sampler)
+    })
 }

@@ -56,6 +56,8 @@ pub fn build_with(
     let mut lights = file.lights.clone();
     let mut textures = Vec::new();
     let mut material_textures: Vec<Option<u32>> = Vec::new();
+    let mut normal_maps = Vec::new();
+    let mut material_normal_maps: Vec<Option<(u32, f32)>> = Vec::new();
     let mut notes = Vec::new();
     let mut mesh = Mesh::default();
     let mut placed = Vec::new();
@@ -141,6 +143,15 @@ pub fn build_with(
                     let first_texture = textures.len() as u32;
                     textures.extend(imported.textures.iter().cloned());
                     material_textures.resize(base, None);
+                    let first_normal = normal_maps.len() as u32;
+                    normal_maps.extend(imported.normal_maps.iter().cloned());
+                    material_normal_maps.resize(base, None);
+                    material_normal_maps.extend(
+                        imported
+                            .material_normal_maps
+                            .iter()
+                            .map(|n| n.map(|(layer, scale)| (first_normal + layer as u32, scale))),
+                    );
                     for ((name, spec), tex) in
                         imported.materials.iter().zip(&imported.material_textures)
                     {
@@ -183,6 +194,16 @@ pub fn build_with(
                     }
                     if let Some(uv) = part.uv {
                         m.uv = uv;
+                    }
+                    if let Some(t) = part.tangents {
+                        let turn = Quat::from_rotation_y(object.rotate_y_deg.to_radians());
+                        m.tangent = t
+                            .into_iter()
+                            .map(|t| {
+                                let v = turn * Vec3::new(t[0], t[1], t[2]);
+                                [v.x, v.y, v.z, t[3]]
+                            })
+                            .collect();
                     }
                     append(
                         &mut mesh,
@@ -230,6 +251,7 @@ pub fn build_with(
     }
     file.lights = lights;
     material_textures.resize(materials.len(), None);
+    material_normal_maps.resize(materials.len(), None);
     Ok(Scene {
         file,
         mesh,
@@ -238,6 +260,8 @@ pub fn build_with(
         notes,
         textures,
         material_textures,
+        normal_maps,
+        material_normal_maps,
     })
 }
 

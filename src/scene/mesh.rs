@@ -13,8 +13,10 @@ pub struct Mesh {
     /// Linear RGBA multiplying the material's base colour per vertex (glTF vertex colours and
     /// base colour textures sampled at the vertices); white elsewhere.
     pub tint: Vec<[f32; 4]>,
-    /// Texture coordinates for the material's base colour texture (zero without one).
+    /// Texture coordinates for the material's base colour and normal maps (zero without).
     pub uv: Vec<[f32; 2]>,
+    /// Tangent (xyz) and bitangent sign (w) for normal maps; zero where there is none.
+    pub tangent: Vec<[f32; 4]>,
     pub indices: Vec<u32>,
 }
 
@@ -49,6 +51,7 @@ impl Mesh {
             material: vec![0; n],
             tint: vec![[1.0; 4]; n],
             uv: vec![[0.0; 2]; n],
+            tangent: vec![[0.0; 4]; n],
             indices,
         }
     }
@@ -94,6 +97,7 @@ impl Mesh {
         self.blurred_normals.extend(other.blurred_normals);
         self.tint.extend(other.tint);
         self.uv.extend(other.uv);
+        self.tangent.extend(other.tangent);
     }
 
     pub fn triangle_count(&self) -> u32 {
@@ -106,6 +110,48 @@ impl Mesh {
             |(lo, hi), &p| (lo.min(p), hi.max(p)),
         )
     }
+}
+
+/// Per-vertex tangents from texture coordinates (each triangle's ∂p/∂u, area-weighted, then
+/// made orthogonal to the vertex normal of the triangle fan; w is the bitangent's handedness).
+/// Vertices with degenerate UVs get a zero tangent (their normal map is then ignored).
+pub fn tangents(positions: &[Vec3], uv: &[[f32; 2]], indices: &[u32]) -> Vec<[f32; 4]> {
+    let n = positions.len();
+    let (mut t, mut b, mut normal) = (
+        vec![Vec3::ZERO; n],
+        vec![Vec3::ZERO; n],
+        vec![Vec3::ZERO; n],
+    );
+    for tri in indices.chunks_exact(3) {
+        let [i0, i1, i2] = [tri[0], tri[1], tri[2]].map(|i| i as usize);
+        let (e1, e2) = (positions[i1] - positions[i0], positions[i2] - positions[i0]);
+        let (du1, dv1) = (uv[i1][0] - uv[i0][0], uv[i1][1] - uv[i0][1]);
+        let (du2, dv2) = (uv[i2][0] - uv[i0][0], uv[i2][1] - uv[i0][1]);
+        let det = du1 * dv2 - du2 * dv1;
+        if det.abs() < 1e-12 || !det.is_finite() {
+            continue;
+        }
+        let r = 1.0 / det;
+        let (tt, bb) = ((e1 * dv2 - e2 * dv1) * r, (e2 * du1 - e1 * du2) * r);
+        let face = e1.cross(e2);
+        for i in [i0, i1, i2] {
+            t[i] += tt;
+            b[i] += bb;
+            normal[i] += face;
+        }
+    }
+    (0..n)
+        .map(|i| {
+            let nn = normal[i].normalize_or_zero();
+            let tan = (t[i] - nn * nn.dot(t[i])).normalize_or_zero();
+            let w = if nn.cross(tan).dot(b[i]) < 0.0 {
+                -1.0
+            } else {
+                1.0
+            };
+            [tan.x, tan.y, tan.z, w]
+        })
+        .collect()
 }
 
 /// Triangulates the polygon `corners` as a fan into `out`, leaving out triangles that repeat a

@@ -38,15 +38,17 @@ pub struct Vertex {
     material: u32,
     /// Linear RGBA base-colour tint, 8 bits per channel.
     tint: [u8; 4],
-    /// Base colour texture coordinates.
+    /// Base colour and normal map texture coordinates.
     uv: [f32; 2],
+    /// Tangent and bitangent sign (normal maps).
+    tangent: [f32; 4],
 }
 
 /// The vertex layout the G-buffer and photon passes share.
 pub const VERTEX_LAYOUT: wgpu::VertexBufferLayout<'static> = wgpu::VertexBufferLayout {
     array_stride: std::mem::size_of::<Vertex>() as u64,
     step_mode: wgpu::VertexStepMode::Vertex,
-    attributes: &wgpu::vertex_attr_array![0 => Float32x3, 1 => Float32x3, 2 => Float32x3, 3 => Uint32, 6 => Unorm8x4, 7 => Float32x2],
+    attributes: &wgpu::vertex_attr_array![0 => Float32x3, 1 => Float32x3, 2 => Float32x3, 3 => Uint32, 6 => Unorm8x4, 7 => Float32x2, 8 => Float32x4],
 };
 
 /// A scene's mesh on the GPU.
@@ -67,6 +69,7 @@ pub const PASS: PassDecl = PassDecl {
         read("materials.scene"),
         texture_array("materials.textures"),
         sampler("materials.sampler"),
+        texture_array("materials.normal_maps"),
     ],
     attachments: &[
         "gbuffer.normal_distance",
@@ -221,6 +224,7 @@ pub fn upload(device: &wgpu::Device, scene: &Scene) -> MeshBuffers {
             material: mesh.material[i],
             tint: mesh.tint[i].map(|c| (c.clamp(0.0, 1.0) * 255.0).round() as u8),
             uv: mesh.uv[i],
+            tangent: mesh.tangent[i],
         })
         .collect();
     let label = Some(scene.name());

@@ -56,8 +56,10 @@ pub struct Part {
     pub normals: Option<Vec<Vec3>>,
     /// Per-vertex linear RGBA multiplying the material's base colour (COLOR_0), if present.
     pub tint: Option<Vec<[f32; 4]>>,
-    /// Texture coordinates for the material's base colour texture, if it has one.
+    /// Texture coordinates for the material's base colour and normal maps, if it has them.
     pub uv: Option<Vec<[f32; 2]>>,
+    /// Tangents (xyz, w: bitangent sign), world space, where the material has a normal map.
+    pub tangents: Option<Vec<[f32; 4]>>,
     /// Index into `Imported::materials`.
     pub material: usize,
 }
@@ -70,6 +72,10 @@ pub struct Imported {
     pub material_textures: Vec<Option<usize>>,
     /// Decoded base colour textures (sRGB RGBA8).
     pub textures: Vec<crate::scene::TextureImage>,
+    /// Normal map of each material (index into `normal_maps`) with its scale.
+    pub material_normal_maps: Vec<Option<(usize, f32)>>,
+    /// Decoded tangent-space normal maps (linear RGBA8).
+    pub normal_maps: Vec<crate::scene::TextureImage>,
     /// Lights in the file's photometric units (lux, candela); `scene::model` scales them.
     pub lights: Vec<LightSpec>,
     pub camera: Option<Camera>,
@@ -134,8 +140,9 @@ pub fn import_bytes(
     let doc = gltf::Document::from_json(root).map_err(|e| GltfError::Invalid(e.to_string()))?;
     let buffers = load_buffers(&doc, blob, base, folder)?;
     let textures = Textures::new(&doc, &buffers, base, folder, &mut imported.notes);
-    // Texture indices already added to `imported.textures`, in order.
+    // Texture indices already added to `imported.textures` / `normal_maps`, in order.
     let mut used: Vec<usize> = Vec::new();
+    let mut used_normals: Vec<usize> = Vec::new();
     for (i, m) in doc.materials().enumerate() {
         let mr = m.pbr_metallic_roughness();
         let g = material::GltfMaterial {
@@ -151,11 +158,18 @@ pub fn import_bytes(
             ),
             material: m.clone(),
         };
-        if m.normal_texture().is_some() || m.occlusion_texture().is_some() {
-            imported.notes.push(format!(
-                "material {i}: normal and occlusion maps are not used"
-            ));
+        if m.occlusion_texture().is_some() {
+            imported
+                .notes
+                .push(format!("material {i}: its occlusion map is not used"));
         }
+        let normal = m.normal_texture().and_then(|t| {
+            let index = t.texture().index();
+            let image = textures.get(index)?;
+            let layer = add_once(&mut used_normals, &mut imported.normal_maps, index, image);
+            Some((layer, t.scale()))
+        });
+        imported.material_normal_maps.push(normal);
         let name = m
             .name()
             .map_or_else(|| format!("material-{i}"), str::to_string);
@@ -163,14 +177,7 @@ pub fn import_bytes(
         let base = mr.base_color_texture().map(|t| t.texture().index());
         let layer = base.and_then(|index| {
             let image = textures.get(index)?;
-            Some(match used.iter().position(|&u| u == index) {
-                Some(k) => k,
-                None => {
-                    used.push(index);
-                    imported.textures.push(image.clone());
-                    imported.textures.len() - 1
-                }
-            })
+            Some(add_once(&mut used, &mut imported.textures, index, image))
         });
         imported.material_textures.push(layer);
     }
@@ -178,6 +185,7 @@ pub fn import_bytes(
     // rough metal, which shows black without an environment to reflect).
     let default_material = imported.materials.len();
     imported.material_textures.push(None);
+    imported.material_normal_maps.push(None);
     imported.materials.push((
         "default".into(),
         MaterialSpec::Opaque {
@@ -212,12 +220,33 @@ pub fn import_bytes(
         if let Some(mesh) = node.mesh() {
             for (pi, prim) in mesh.primitives().enumerate() {
                 let material = prim.material().index().unwrap_or(default_material);
-                let tex = prim
-                    .material()
+                // One set of texture coordinates per primitive: the base colour map's, else
+                // the normal map's (files that use two sets get a note).
+                let pm = prim.material();
+                let base_set = pm
                     .pbr_metallic_roughness()
                     .base_color_texture()
                     .and_then(|t| textures.get(t.texture().index()).map(|_| t.tex_coord()));
-                match read_primitive(&prim, &buffers, world, tex, material) {
+                let normal_set = pm
+                    .normal_texture()
+                    .and_then(|t| textures.get(t.texture().index()).map(|_| t.tex_coord()));
+                if let (Some(a), Some(b)) = (base_set, normal_set) {
+                    if a != b {
+                        imported.notes.push(format!(
+                            "mesh {:?}: the normal map's TEXCOORD_{b} is read as TEXCOORD_{a}",
+                            mesh.name().unwrap_or("")
+                        ));
+                    }
+                }
+                let uv_set = base_set.or(normal_set);
+                match read_primitive(
+                    &prim,
+                    &buffers,
+                    world,
+                    uv_set,
+                    normal_set.is_some(),
+                    material,
+                ) {
                     Ok(Some(part)) => {
                         vertices += part.mesh.positions.len();
                         triangles += part.mesh.indices.len() / 3;
@@ -320,6 +349,23 @@ fn light_spec(light: &gltf::khr_lights_punctual::Light, world: Mat4) -> LightSpe
     }
 }
 
+/// `image`'s position in `out`, added the first time texture `index` is seen.
+fn add_once(
+    seen: &mut Vec<usize>,
+    out: &mut Vec<crate::scene::TextureImage>,
+    index: usize,
+    image: &crate::scene::TextureImage,
+) -> usize {
+    match seen.iter().position(|&u| u == index) {
+        Some(k) => k,
+        None => {
+            seen.push(index);
+            out.push(image.clone());
+            out.len() - 1
+        }
+    }
+}
+
 /// The file's textures that some material uses, decoded once; failures become notes.
 struct Textures {
     decoded: Vec<Option<crate::scene::TextureImage>>,
@@ -342,6 +388,8 @@ impl Textures {
                 is(pbr.base_color_texture())
                     || is(m.emissive_texture())
                     || is(pbr.metallic_roughness_texture())
+                    || m.normal_texture()
+                        .is_some_and(|n| n.texture().index() == t.index())
             })
         };
         let decoded = doc

@@ -14,7 +14,8 @@ pub fn read_primitive(
     prim: &gltf::Primitive,
     buffers: &[Vec<u8>],
     world: Mat4,
-    base_colour_set: Option<u32>,
+    uv_set: Option<u32>,
+    needs_tangents: bool,
     material: usize,
 ) -> Result<Option<Part>, String> {
     use gltf::mesh::Mode;
@@ -138,7 +139,7 @@ pub fn read_primitive(
         .read_colors(0)
         .map(|c| c.into_rgba_f32().collect::<Vec<_>>())
         .filter(|c| c.len() == count);
-    let uv: Option<Vec<[f32; 2]>> = base_colour_set.and_then(|set| {
+    let uv: Option<Vec<[f32; 2]>> = uv_set.and_then(|set| {
         let sem = gltf::Semantic::TexCoords(set);
         check(sem, gltf::accessor::Dimensions::Vec2)
             .ok()
@@ -161,11 +162,33 @@ pub fn read_primitive(
             .map(|v| v.map(|x| x.clamp(0.0, 1.0)))
             .collect()
     });
+    // Tangents: the file's (moved with the model), else made from the UVs, for normal maps.
+    let tangents = if needs_tangents {
+        let given = match check(gltf::Semantic::Tangents, gltf::accessor::Dimensions::Vec4) {
+            Ok(Some(n)) if n == count => reader.read_tangents().map(|it| {
+                let m3 = Mat3::from_mat4(world);
+                let flip = if world.determinant() < 0.0 { -1.0 } else { 1.0 };
+                it.map(|t| {
+                    let v = (m3 * Vec3::new(t[0], t[1], t[2])).normalize_or_zero();
+                    [v.x, v.y, v.z, t[3].signum() * flip]
+                })
+                .collect::<Vec<_>>()
+            }),
+            _ => None,
+        };
+        given.or_else(|| {
+            uv.as_ref()
+                .map(|uv| crate::scene::mesh::tangents(&mesh.positions, uv, &mesh.indices))
+        })
+    } else {
+        None
+    };
     Ok(Some(Part {
         mesh,
         normals,
         tint,
         uv,
+        tangents,
         material,
     }))
 }
