@@ -17,10 +17,11 @@ How the scene is matched (docs/bench/ground-truth.md says more):
   color × intensity; an area light of exitance M has radiance M/π; Fovea's constant ambient
   (a fraction of the light, albedo-weighted) becomes a constant environment of radiance
   ambient × light / π (Mitsuba shadows it, Fovea does not: a small, stated difference);
-* translucent materials: a smooth dielectric boundary (η) around a homogeneous medium with
+* translucent materials: a rough dielectric boundary (GGX, α = roughness², η) around a homogeneous medium with
   σt = σ's + σa and single-scattering albedo σ's/σt per channel, isotropic phase function
   (Jensen's reduced coefficients), scaled from mm⁻¹ to scene units by mm_per_unit;
-* opaque materials: Lambertian with the albedo; emitters: area lights (one-sided, front face);
+* opaque materials: roughplastic (GGX coating, α = roughness², over the albedo) or, when
+  metallic, roughconductor with the albedo as its specular colour; emitters: area lights;
 * background: pixels the camera ray leaves the scene through get Fovea's background colour.
 """
 import argparse
@@ -75,8 +76,21 @@ def quad_transform(mi, corners):
 
 def material_dict(spec, mm_per_unit, diffuse_only):
     kind = spec["kind"]
+    # Fovea's surfaces (docs/scenes.md): GGX with α = roughness², clamped like Fovea's
+    # optics::specular::MIN_ALPHA. Opaque: a rough dielectric coating over a diffuse base
+    # (roughplastic, IOR as given), or a rough conductor with the base colour as its specular
+    # reflectance when metallic; translucent: a rough dielectric boundary (roughdielectric).
+    alpha = max(spec.get("roughness", 0.3 if kind == "translucent" else 0.5) ** 2, 0.002)
     if kind == "opaque":
-        return {"bsdf": {"type": "diffuse", "reflectance": {"type": "rgb", "value": spec["albedo"]}}}
+        if diffuse_only:
+            return {"bsdf": {"type": "diffuse", "reflectance": {"type": "rgb", "value": spec["albedo"]}}}
+        if spec.get("metallic", 0.0) >= 0.5:
+            return {"bsdf": {"type": "roughconductor", "distribution": "ggx", "alpha": alpha,
+                             "material": "none",
+                             "specular_reflectance": {"type": "rgb", "value": spec["albedo"]}}}
+        return {"bsdf": {"type": "roughplastic", "distribution": "ggx", "alpha": alpha,
+                         "int_ior": spec.get("ior", 1.5), "nonlinear": False,
+                         "diffuse_reflectance": {"type": "rgb", "value": spec["albedo"]}}}
     if kind == "emitter":
         m = spec["emission"]
         return {"bsdf": {"type": "diffuse", "reflectance": {"type": "rgb", "value": [0, 0, 0]}},
@@ -91,7 +105,8 @@ def material_dict(spec, mm_per_unit, diffuse_only):
         raise SystemExit("--diffuse-only: translucent materials are not diffuse; leave them out of the scene")
     # Mitsuba takes σt as an RGB in [0, 1] times `scale`: normalise by the largest channel.
     peak = max(sigma_t)
-    return {"bsdf": {"type": "dielectric", "int_ior": eta, "ext_ior": 1.0},
+    return {"bsdf": {"type": "roughdielectric", "distribution": "ggx", "alpha": alpha,
+                     "int_ior": eta, "ext_ior": 1.0},
             "interior": {"type": "homogeneous", "sigma_t": {"type": "rgb", "value": [t / peak for t in sigma_t]},
                          "albedo": {"type": "rgb", "value": albedo}, "scale": mm_per_unit * peak}}
 
@@ -115,7 +130,8 @@ def main():
     import mitsuba as mi
     mi.set_variant(a.variant)
     scene_dir = os.path.dirname(os.path.abspath(a.scene))
-    mesh_dir = os.path.join(scene_dir, "..", "meshes")
+    # Built-in meshes (bunny.ply) live in the repository's assets/meshes, wherever the scene is.
+    mesh_dir = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "assets", "meshes")
     with open(a.scene) as f:
         s = json.load(f)
     mm = s.get("mm_per_unit", 10.0)
