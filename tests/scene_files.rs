@@ -318,3 +318,18 @@ fn explain_runs_on_every_shipped_scene() {
         }
     }
 }
+
+#[test]
+fn emissive_gltf_materials_become_area_lights_with_their_strength() {
+    let dir = scratch("emissive");
+    std::fs::write(dir.join("tri.bin"), triangle_bin(GOOD, [0, 1, 2])).unwrap();
+    let mut g = triangle_gltf("tri.bin", 48);
+    g["extensionsUsed"] = json!(["KHR_materials_emissive_strength"]);
+    g["materials"] = json!([{"name": "lamp", "emissiveFactor": [1.0, 0.5, 0.25],
+        "extensions": {"KHR_materials_emissive_strength": {"emissiveStrength": 4.0}}}]);
+    std::fs::write(dir.join("lamp.gltf"), g.to_string()).unwrap();
+    let s = load(&dir, "lamp.gltf").unwrap();
+    assert_eq!(s.materials[0].1.emission(), [4.0, 2.0, 1.0]);
+    assert!(s.has_emitter(), "radiosity's auto mode sees an emitter");
+    std::fs::remove_dir_all(&dir).unwrap();
+}

@@ -27,29 +27,6 @@ pub fn fresnel_diffuse_reflectance(eta: f64) -> f64 {
     }
 }
 
-/// Fresnel transmittance F_t = 1 − F_r of unpolarised light entering a dielectric of relative
-/// index η at incidence cos θ. The exact form, not Schlick's: Schlick keeps a grazing
-/// reflection even at η = 1, where there is no interface at all. cos θ is clamped into [0, 1]
-/// (rounding above 1 cannot make it negative); total internal reflection transmits nothing.
-pub fn fresnel_transmittance(eta: f64, cos_theta: f64) -> f64 {
-    let ci = if cos_theta.is_nan() {
-        0.0
-    } else {
-        cos_theta.clamp(0.0, 1.0)
-    };
-    if ci <= 0.0 {
-        return 0.0;
-    }
-    let sin2_t = (1.0 - ci * ci) / (eta * eta);
-    if sin2_t >= 1.0 {
-        return 0.0;
-    }
-    let ct = (1.0 - sin2_t).sqrt();
-    let rs = (ci - eta * ct) / (ci + eta * ct);
-    let rp = (eta * ci - ct) / (eta * ci + ct);
-    1.0 - 0.5 * (rs * rs + rp * rp)
-}
-
 /// The reduced albedo α' whose dipole reflects `rd` in total at index `eta` (the total
 /// depends on α' and η only), by bisection; `rd` is clamped to what α' ∈ [0, 0.9999] can give.
 /// Used to turn a colour (a glTF base colour) into scattering coefficients.
@@ -327,30 +304,11 @@ mod tests {
     }
 
     #[test]
-    fn fresnel_terms_behave_at_matched_and_grazing_boundaries() {
+    fn diffuse_fresnel_reflectance_vanishes_at_a_matched_boundary() {
         assert!(
             (fresnel_diffuse_reflectance(1.0) - 0.0016).abs() < 1e-4,
             "η = 1: almost no reflection"
         );
-        assert!(
-            (fresnel_transmittance(1.0, 0.3) - 1.0).abs() < 1e-12,
-            "η = 1: no interface"
-        );
-        assert!(
-            fresnel_transmittance(0.7, 0.1) == 0.0,
-            "total internal reflection"
-        );
-        assert!(
-            (fresnel_transmittance(1.5, 1.0) - 0.96).abs() < 1e-12,
-            "F0(glass) = 0.04"
-        );
-        assert_eq!(fresnel_transmittance(1.3, 0.0), 0.0);
-        assert_eq!(
-            fresnel_transmittance(1.3, 1.0000001),
-            fresnel_transmittance(1.3, 1.0),
-            "cos > 1 from rounding"
-        );
-        assert!(fresnel_transmittance(1.3, f64::NAN).is_finite());
     }
 
     #[test]
