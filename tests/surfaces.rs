@@ -128,6 +128,48 @@ fn ggx_shading_on_the_gpu_matches_its_cpu_twin() {
     }
 }
 
+/// Checks every floor pixel (y = 0) of a shadowed render against the same render unshadowed:
+/// `inside(x)` says how far inside (> 0) or outside (< 0) the geometric shadow a floor point
+/// lies, `None` to skip it; points within `band` of the edge are skipped. Shadowed points must
+/// keep < 10% of their light, open ones more than `open_keeps`. Returns (shadowed, open) counts.
+fn check_floor_shadow(
+    scene: &Scene,
+    (w, h): (u32, u32),
+    shadowed: &Inspection,
+    lit: &Inspection,
+    band: f32,
+    open_keeps: f32,
+    inside: impl Fn(Vec3) -> Option<f32>,
+) -> (usize, usize) {
+    let eye = Vec3::from(scene.file.camera.eye);
+    let (mut dark, mut open) = (0, 0);
+    for (k, nd) in shadowed.normal_distance.iter().enumerate() {
+        let x = eye + ray(scene, w, h, k) * nd[3];
+        if nd[3] <= 0.0 || x.y.abs() > 1e-3 {
+            continue; // not the floor
+        }
+        let Some(depth) = inside(x) else { continue };
+        if depth.abs() < band {
+            continue;
+        }
+        let ratio = shadowed.color[k][1] / lit.color[k][1].max(1e-6);
+        if depth > 0.0 {
+            assert!(
+                ratio < 0.1,
+                "pixel {k} in the shadow keeps {ratio} of its light"
+            );
+            dark += 1;
+        } else {
+            assert!(
+                ratio > open_keeps,
+                "pixel {k} in the open lost light: {ratio} (acne)"
+            );
+            open += 1;
+        }
+    }
+    (dark, open)
+}
+
 /// A floor with a square roof 3 units above it, lit from above at a slant.
 fn shadow_scene() -> (Scene, Vec3) {
     let to_light = Vec3::new(0.3, 1.0, 0.2).normalize();
@@ -160,35 +202,12 @@ fn shadows_fall_where_the_roof_blocks_the_light_with_no_acne_and_no_peter_pannin
     // The map's texel over the scene's bounding sphere; edges may blur over ~3 of them.
     let (lo, hi) = scene.mesh.bounds();
     let texel = (hi - lo).length() / fovea::render::pass::shadow::SIDE as f32;
-    let band = 3.0 * texel;
-    let eye = Vec3::from(scene.file.camera.eye);
-    let (mut dark, mut open) = (0, 0);
-    for (k, nd) in shadowed.normal_distance.iter().enumerate() {
-        let x = eye + ray(&scene, w, h, k) * nd[3];
-        if nd[3] <= 0.0 || x.y.abs() > 1e-3 {
-            continue; // not the floor
-        }
-        // Where the ray towards the light crosses the roof's plane, and how far inside it.
-        let p = x + l * (3.0 / l.y);
-        let inside = 3.0 - p.x.abs().max(p.z.abs());
-        if inside.abs() < band {
-            continue;
-        }
-        let ratio = shadowed.color[k][1] / lit.color[k][1];
-        if inside > 0.0 {
-            assert!(
-                ratio < 0.1,
-                "pixel {k} under the roof keeps {ratio} of its light"
-            );
-            dark += 1;
-        } else {
-            assert!(
-                ratio > 0.995,
-                "pixel {k} in the open lost light: {ratio} (acne)"
-            );
-            open += 1;
-        }
-    }
+    // Where the ray towards the light crosses the roof's plane, and how far inside it.
+    let (dark, open) =
+        check_floor_shadow(&scene, (w, h), &shadowed, &lit, 3.0 * texel, 0.995, |x| {
+            let p = x + l * (3.0 / l.y);
+            Some(3.0 - p.x.abs().max(p.z.abs()))
+        });
     assert!(
         dark > 200 && open > 2000,
         "{dark} shadowed and {open} open floor pixels checked"
@@ -223,38 +242,13 @@ fn a_spot_light_casts_its_own_shadow() {
         q
     });
     let shadowed = render(&mut r, &full("spot", w, h, 2));
-    let eye = Vec3::from(scene.file.camera.eye);
-    let band = 0.25;
-    let (mut dark, mut open) = (0, 0);
-    for (k, nd) in shadowed.normal_distance.iter().enumerate() {
-        let x = eye + ray(&scene, w, h, k) * nd[3];
-        if nd[3] <= 0.0 || x.y.abs() > 1e-3 {
-            continue;
-        }
-        // Inside the inner cone only (full light), and away from the roof's shadow edge: the
-        // ray to the light crosses the roof's plane at 5/8 of the point's offset.
-        if (x.x * x.x + x.z * x.z).sqrt() > 8.0 * 50f32.to_radians().tan() - band {
-            continue;
-        }
-        let inside = 3.0 - (x.x.abs().max(x.z.abs()) * 5.0 / 8.0);
-        if inside.abs() < band {
-            continue;
-        }
-        let ratio = shadowed.color[k][1] / lit.color[k][1].max(1e-6);
-        if inside > 0.0 {
-            assert!(
-                ratio < 0.1,
-                "pixel {k} under the roof keeps {ratio} of the spot's light"
-            );
-            dark += 1;
-        } else {
-            assert!(
-                ratio > 0.99,
-                "pixel {k} in the spot's open light lost some: {ratio} (acne)"
-            );
-            open += 1;
-        }
-    }
+    // Inside the inner cone only (full light); the ray to the light crosses the roof's plane
+    // at 5/8 of the point's offset from the axis.
+    let cone = 8.0 * 50f32.to_radians().tan() - 0.25;
+    let (dark, open) = check_floor_shadow(&scene, (w, h), &shadowed, &lit, 0.25, 0.99, |x| {
+        let r = (x.x * x.x + x.z * x.z).sqrt();
+        (r < cone).then(|| 3.0 - x.x.abs().max(x.z.abs()) * 5.0 / 8.0)
+    });
     assert!(
         dark > 200 && open > 200,
         "{dark} shadowed and {open} open floor pixels checked"
@@ -420,181 +414,5 @@ async fn a_served_folder_offers_its_scenes_by_name_and_leaves_broken_ones_out() 
         .await;
     assert!(refused.is_err(), "{refused:?}");
     running.stop().await;
-    std::fs::remove_dir_all(&dir).unwrap();
-}
-
-/// A PNG of `w`×1 pixels with the given RGB colours.
-fn png_row(colours: &[[u8; 3]]) -> Vec<u8> {
-    let mut out = Vec::new();
-    let mut enc = png::Encoder::new(&mut out, colours.len() as u32, 1);
-    enc.set_color(png::ColorType::Rgb);
-    let mut w = enc.write_header().unwrap();
-    w.write_image_data(&colours.concat()).unwrap();
-    drop(w);
-    out
-}
-
-#[test]
-fn a_normal_map_tilts_the_shading_normal_towards_its_tangent() {
-    use base64::Engine;
-    // A quad in the XZ plane facing +Y, u along +x, and a flat normal map that leans every
-    // normal 45° towards +u: (1, 0, 1)/√2 encoded.
-    let mut bin = Vec::new();
-    for p in [
-        [-1f32, 0.0, 1.0],
-        [1.0, 0.0, 1.0],
-        [1.0, 0.0, -1.0],
-        [-1.0, 0.0, -1.0],
-    ] {
-        for c in p {
-            bin.extend_from_slice(&c.to_le_bytes());
-        }
-    }
-    for uv in [[0f32, 1.0], [1.0, 1.0], [1.0, 0.0], [0.0, 0.0]] {
-        for c in uv {
-            bin.extend_from_slice(&c.to_le_bytes());
-        }
-    }
-    for i in [0u32, 1, 2, 0, 2, 3] {
-        bin.extend_from_slice(&i.to_le_bytes());
-    }
-    let lean = (0.5 + 0.5 * std::f32::consts::FRAC_1_SQRT_2) * 255.0;
-    let texel = [lean.round() as u8, 128, lean.round() as u8];
-    let image = png_row(&[texel; 4]);
-    let image_at = bin.len();
-    bin.extend_from_slice(&image);
-    let doc = json!({
-        "asset": {"version": "2.0"},
-        "buffers": [{"byteLength": bin.len(), "uri": format!("data:application/octet-stream;base64,{}", base64::engine::general_purpose::STANDARD.encode(&bin))}],
-        "bufferViews": [
-            {"buffer": 0, "byteOffset": 0, "byteLength": 48},
-            {"buffer": 0, "byteOffset": 48, "byteLength": 32},
-            {"buffer": 0, "byteOffset": 80, "byteLength": 24},
-            {"buffer": 0, "byteOffset": image_at, "byteLength": image.len()}
-        ],
-        "accessors": [
-            {"bufferView": 0, "componentType": 5126, "count": 4, "type": "VEC3", "min": [-1, 0, -1], "max": [1, 0, 1]},
-            {"bufferView": 1, "componentType": 5126, "count": 4, "type": "VEC2"},
-            {"bufferView": 2, "componentType": 5125, "count": 6, "type": "SCALAR"}
-        ],
-        "images": [{"bufferView": 3, "mimeType": "image/png"}],
-        "samplers": [{}],
-        "textures": [{"source": 0, "sampler": 0}],
-        "materials": [{"normalTexture": {"index": 0}, "pbrMetallicRoughness": {"metallicFactor": 0.0}}],
-        "meshes": [{"primitives": [{"attributes": {"POSITION": 0, "TEXCOORD_0": 1}, "indices": 2, "material": 0}]}],
-        "nodes": [{"mesh": 0}],
-        "scenes": [{"nodes": [0]}],
-        "scene": 0
-    });
-    let dir = std::env::temp_dir().join(format!("fovea-normal-map-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    std::fs::write(dir.join("bumpy.gltf"), doc.to_string()).unwrap();
-    let scene = Scene::load(&dir.join("bumpy.gltf"), &Folder::open(&dir).unwrap()).unwrap();
-    std::fs::remove_dir_all(&dir).unwrap();
-    assert_eq!(scene.normal_maps.len(), 1);
-    let t = scene.mesh.tangent[0];
-    assert!(
-        (t[0] - 1.0).abs() < 1e-5 && t[3] != 0.0,
-        "tangent along +u: {t:?}"
-    );
-    let mut r = renderer();
-    r.add_scene(scene).unwrap();
-    let img = render(&mut r, &full("bumpy", 64, 48, 1));
-    let mut seen = 0;
-    for nd in img.normal_distance.iter().filter(|nd| nd[3] > 0.0) {
-        let n = Vec3::new(nd[0], nd[1], nd[2]);
-        let expected = Vec3::new(1.0, 1.0, 0.0).normalize();
-        assert!(
-            n.dot(expected) > 0.999,
-            "normal {n:?}, expected {expected:?}"
-        );
-        seen += 1;
-    }
-    assert!(seen > 100, "{seen} pixels");
-}
-
-#[test]
-fn a_base_colour_texture_is_sampled_per_pixel() {
-    use base64::Engine;
-    // A quad in the XY plane facing +Z, u running along x; its texture: red | blue.
-    let mut bin = Vec::new();
-    for p in [
-        [-1f32, -1.0, 0.0],
-        [1.0, -1.0, 0.0],
-        [1.0, 1.0, 0.0],
-        [-1.0, 1.0, 0.0],
-    ] {
-        for c in p {
-            bin.extend_from_slice(&c.to_le_bytes());
-        }
-    }
-    for uv in [[0f32, 1.0], [1.0, 1.0], [1.0, 0.0], [0.0, 0.0]] {
-        for c in uv {
-            bin.extend_from_slice(&c.to_le_bytes());
-        }
-    }
-    for i in [0u32, 1, 2, 0, 2, 3] {
-        bin.extend_from_slice(&i.to_le_bytes());
-    }
-    // 8 red texels then 8 blue: bilinear filtering blends only near the edges.
-    let row: Vec<[u8; 3]> = (0..16)
-        .map(|i| if i < 8 { [255, 0, 0] } else { [0, 0, 255] })
-        .collect();
-    let image = png_row(&row);
-    let image_at = bin.len();
-    bin.extend_from_slice(&image);
-    let doc = json!({
-        "asset": {"version": "2.0"},
-        "buffers": [{"byteLength": bin.len(), "uri": format!("data:application/octet-stream;base64,{}", base64::engine::general_purpose::STANDARD.encode(&bin))}],
-        "bufferViews": [
-            {"buffer": 0, "byteOffset": 0, "byteLength": 48},
-            {"buffer": 0, "byteOffset": 48, "byteLength": 32},
-            {"buffer": 0, "byteOffset": 80, "byteLength": 24},
-            {"buffer": 0, "byteOffset": image_at, "byteLength": image.len()}
-        ],
-        "accessors": [
-            {"bufferView": 0, "componentType": 5126, "count": 4, "type": "VEC3", "min": [-1, -1, 0], "max": [1, 1, 0]},
-            {"bufferView": 1, "componentType": 5126, "count": 4, "type": "VEC2"},
-            {"bufferView": 2, "componentType": 5125, "count": 6, "type": "SCALAR"}
-        ],
-        "images": [{"bufferView": 3, "mimeType": "image/png"}],
-        "samplers": [{}],
-        "textures": [{"source": 0, "sampler": 0}],
-        "materials": [{"pbrMetallicRoughness": {"baseColorTexture": {"index": 0}, "metallicFactor": 0.0, "roughnessFactor": 1.0}}],
-        "meshes": [{"primitives": [{"attributes": {"POSITION": 0, "TEXCOORD_0": 1}, "indices": 2, "material": 0}]}],
-        "nodes": [{"mesh": 0}],
-        "scenes": [{"nodes": [0]}],
-        "scene": 0
-    });
-    let dir = std::env::temp_dir().join(format!("fovea-texture-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    std::fs::write(dir.join("tile.gltf"), doc.to_string()).unwrap();
-    let scene = Scene::load(&dir.join("tile.gltf"), &Folder::open(&dir).unwrap()).unwrap();
-    assert_eq!(scene.textures.len(), 1);
-    let mut r = renderer();
-    r.add_scene(scene).unwrap();
-    let (w, h) = (80, 60);
-    let img = render(&mut r, &full("tile", w, h, 1));
-    // Mean red and blue over the covered pixels of the left and right thirds.
-    let mut sums = [[0.0f32; 2]; 2];
-    for (k, nd) in img.normal_distance.iter().enumerate() {
-        let x = k as u32 % w;
-        let side = if x < w / 3 {
-            0
-        } else if x >= 2 * w / 3 {
-            1
-        } else {
-            continue;
-        };
-        if nd[3] > 0.0 {
-            sums[side][0] += img.color[k][0];
-            sums[side][1] += img.color[k][2];
-        }
-    }
-    let [[left_r, left_b], [right_r, right_b]] = sums;
-    // White is added evenly by the specular lobe and the ambient sky; the texture decides
-    // which way each side leans.
-    assert!(left_r > 1.3 * left_b, "left third is red: {sums:?}");
-    assert!(right_b > 3.0 * right_r, "right third is blue: {sums:?}");
     std::fs::remove_dir_all(&dir).unwrap();
 }
