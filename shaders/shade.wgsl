@@ -72,14 +72,35 @@ fn cluster_distance_mm(node: PhotonNode, x_o: vec3<f32>) -> f32 {
     return sqrt(r * r + soft * soft);
 }
 
-// A single photon's softening: its texel's footprint stretched by the surface's slant under
-// the light (CPU twin: optics::dipole::leaf_softening).
-fn leaf_distance_mm(node: PhotonNode, x_o: vec3<f32>) -> f32 {
-    let r = distance(node.pos_extent.xyz, x_o) * frame.mm_per_unit;
+// A single photon's softening radius (mm): its texel's footprint stretched by the surface's
+// slant under the light (CPU twin: optics::dipole::leaf_softening).
+fn leaf_softening_mm(node: PhotonNode) -> f32 {
     let radius = frame.photon_radius_mm;
     let extent_mm = node.pos_extent.w * frame.mm_per_unit;
-    let soft = max(sqrt(radius * extent_mm / (0.70710678 * 1.77245385)), radius);
-    return sqrt(r * r + soft * soft);
+    return max(sqrt(radius * extent_mm / (0.70710678 * 1.77245385)), radius);
+}
+
+// One photon's R_d at x_o, softened by its own footprint and scaled back to its full energy.
+fn leaf_rd(m: Material, node: PhotonNode, x_o: vec3<f32>) -> vec3<f32> {
+    let r = distance(node.pos_extent.xyz, x_o) * frame.mm_per_unit;
+    let soft = leaf_softening_mm(node);
+    return dipole_rd(m, sqrt(r * r + soft * soft)) * softening_gain(m, soft);
+}
+
+// The light R_d returns beyond radius s (mm) of the entry point, per channel, closed form
+// (CPU twin: optics::dipole::Dipole::reflectance_beyond).
+fn reflectance_beyond(m: Material, s: f32) -> vec3<f32> {
+    let dr = sqrt(s * s + m.z_r.xyz * m.z_r.xyz);
+    let dv = sqrt(s * s + m.z_v.xyz * m.z_v.xyz);
+    return 0.5 * m.alpha.xyz * (m.z_r.xyz * exp(-m.sigma_tr.xyz * dr) / dr + m.z_v.xyz * exp(-m.sigma_tr.xyz * dv) / dv);
+}
+
+// What a softened R_d is scaled by to keep its energy: R_d at √(r² + s²) returns only the
+// light beyond s, so total / beyond (CPU twin: optics::dipole::Dipole::softening_gain).
+fn softening_gain(m: Material, s: f32) -> vec3<f32> {
+    let beyond = reflectance_beyond(m, s);
+    let total = reflectance_beyond(m, 0.0);
+    return select(vec3<f32>(1.0), max(total / beyond, vec3<f32>(1.0)), beyond > vec3<f32>(0.0));
 }
 
 // Σ R_d(|x_c − x_o|) Φ_c over every photon (eq. 8).
@@ -89,7 +110,7 @@ fn gather_all(x_o: vec3<f32>, m: Material) -> vec3<f32> {
     for (var i = 0u; i < n * n; i++) {
         let node = nodes[i];
         if (node.flux.w > 0.0) {
-            sum += dipole_rd(m, leaf_distance_mm(node, x_o)) * node.flux.rgb;
+            sum += leaf_rd(m, node, x_o) * node.flux.rgb;
         }
     }
     return sum;
@@ -101,6 +122,8 @@ fn gather_cut(x_o: vec3<f32>, m: Material) -> vec3<f32> {
     let cut_level = frame.cut_level;
     let eps = frame.cut_epsilon;
     let roots = level_side(start) * level_side(start);
+    // Every cluster is softened by the same photon radius: one gain for all of them.
+    let cluster_gain = softening_gain(m, frame.photon_radius_mm);
     var sum = vec3<f32>(0.0);
     var stack: array<vec2<u32>, 32>;
     for (var r = 0u; r < roots; r++) {
@@ -116,11 +139,11 @@ fn gather_cut(x_o: vec3<f32>, m: Material) -> vec3<f32> {
             }
             let d = distance(node.pos_extent.xyz, x_o);
             if (level == 0u) {
-                sum += dipole_rd(m, leaf_distance_mm(node, x_o)) * node.flux.rgb;
+                sum += leaf_rd(m, node, x_o) * node.flux.rgb;
                 continue;
             }
             if (level <= cut_level || node.pos_extent.w < eps * d) {
-                sum += dipole_rd(m, cluster_distance_mm(node, x_o)) * node.flux.rgb;
+                sum += dipole_rd(m, cluster_distance_mm(node, x_o)) * cluster_gain * node.flux.rgb;
                 continue;
             }
             let side = level_side(level);

@@ -88,7 +88,9 @@ fn brute_force_dipole_on_the_gpu_matches_the_cpu_sum() {
             let r_mm = f64::from(Vec3::new(p[0], p[1], p[2]).distance(x_o)) * mm;
             for c in 0..3 {
                 let soft = leaf_softening(radius, f64::from(p[3]) * mm);
-                sum[c] += dipole[c].rd(softened_distance(r_mm, soft)) * f64::from(p[4 + c]);
+                sum[c] += dipole[c].rd(softened_distance(r_mm, soft))
+                    * dipole[c].softening_gain(soft)
+                    * f64::from(p[4 + c]);
             }
         }
         let e_o = specular::lobe_albedo(&table, surface.dielectric_f0, f64::from(n.dot(-ray)));

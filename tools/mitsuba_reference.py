@@ -20,8 +20,8 @@ How the scene is matched (docs/bench/ground-truth.md says more):
 * translucent materials: a rough dielectric boundary (GGX, α = roughness², η) around a homogeneous medium with
   σt = σ's + σa and single-scattering albedo σ's/σt per channel, isotropic phase function
   (Jensen's reduced coefficients), scaled from mm⁻¹ to scene units by mm_per_unit;
-* opaque materials: roughplastic (GGX coating, α = roughness², over the albedo) or, when
-  metallic, roughconductor with the albedo as its specular colour; emitters: area lights;
+* opaque materials: Disney's principled BSDF (base colour, roughness, metallic, specular from the
+  IOR), the same family as Fovea's Lambert + GGX; emitters: area lights;
 * background: pixels the camera ray leaves the scene through get Fovea's background colour.
 """
 import argparse
@@ -84,13 +84,15 @@ def material_dict(spec, mm_per_unit, diffuse_only):
     if kind == "opaque":
         if diffuse_only:
             return {"bsdf": {"type": "diffuse", "reflectance": {"type": "rgb", "value": spec["albedo"]}}}
-        if spec.get("metallic", 0.0) >= 0.5:
-            return {"bsdf": {"type": "roughconductor", "distribution": "ggx", "alpha": alpha,
-                             "material": "none",
-                             "specular_reflectance": {"type": "rgb", "value": spec["albedo"]}}}
-        return {"bsdf": {"type": "roughplastic", "distribution": "ggx", "alpha": alpha,
-                         "int_ior": spec.get("ior", 1.5), "nonlinear": False,
-                         "diffuse_reflectance": {"type": "rgb", "value": spec["albedo"]}}}
+        # Disney's principled BSDF is the same family as Fovea's (UE4's) surface: a diffuse base
+        # that keeps its albedo plus a GGX lobe with F0 = 0.08 × specular (0.04 at 0.5, η 1.5),
+        # metals taking their colour from the base. (roughplastic, a physically coated layer,
+        # returns ~half the diffuse light: a different model of "plastic".)
+        ior = spec.get("ior", 1.5)
+        f0 = ((ior - 1) / (ior + 1)) ** 2
+        return {"bsdf": {"type": "principled", "base_color": {"type": "rgb", "value": spec["albedo"]},
+                         "roughness": spec.get("roughness", 0.5), "metallic": spec.get("metallic", 0.0),
+                         "specular": f0 / 0.08}}
     if kind == "emitter":
         m = spec["emission"]
         return {"bsdf": {"type": "diffuse", "reflectance": {"type": "rgb", "value": [0, 0, 0]}},

@@ -117,6 +117,32 @@ impl Dipole {
         0.5 * self.albedo * (1.0 + (-(4.0 / 3.0) * self.a * s).exp()) * (-s).exp()
     }
 
+    /// The light that diffuses back out beyond radius `s` (mm) of the entry point,
+    /// ∫_s^∞ R_d 2πr dr, in closed form: (α'/2)[z_r e^{−σtr d_r}/d_r + z_v e^{−σtr d_v}/d_v] with
+    /// d = √(s² + z²) (the antiderivative of R_d 2πr is −(α'/2) z e^{−σtr d}/d per source).
+    /// At s = 0 this is `total_reflectance`.
+    pub fn reflectance_beyond(&self, s: f64) -> f64 {
+        let s = if s.is_nan() { 0.0 } else { s.abs() };
+        let term = |z: f64| {
+            let d = (s * s + z * z).sqrt();
+            z * (-self.sigma_tr * d).exp() / d
+        };
+        0.5 * self.albedo * (term(self.z_r) + term(self.z_v))
+    }
+
+    /// What a photon's softened R_d is scaled by so it keeps its energy: evaluating R_d at
+    /// √(r² + s²) instead of r returns only the light beyond radius s (`reflectance_beyond`),
+    /// so the gain is total / beyond. ≥ 1, finite (beyond(s) > 0 for finite s and σtr).
+    /// CPU twin of `softening_gain` in `shaders/shade.wgsl`.
+    pub fn softening_gain(&self, s: f64) -> f64 {
+        let beyond = self.reflectance_beyond(s);
+        if beyond > 0.0 && beyond.is_finite() {
+            (self.reflectance_beyond(0.0) / beyond).max(1.0)
+        } else {
+            1.0
+        }
+    }
+
     /// Radius (mm) of the disc around an entry point through which `fraction` of the light
     /// that diffuses back out leaves: how far light spreads under the surface. Integrates
     /// R_d 2πr dr on a logarithmic grid from 1 µm to 10 m.
@@ -300,6 +326,29 @@ mod tests {
                     "rd {rd} η {eta}: α' {a} gives {back}"
                 );
             }
+        }
+    }
+
+    #[test]
+    fn a_softened_profile_keeps_the_energy_of_the_sharp_one() {
+        for (sp, sa) in [(2.19, 0.0021), (0.74, 0.032), (0.18, 0.061), (7.38, 0.0002)] {
+            let d = Dipole::new(sp, sa, 1.3).unwrap();
+            assert!(
+                (d.reflectance_beyond(0.0) - d.total_reflectance()).abs()
+                    < 1e-9 * d.total_reflectance().max(1e-12) + 1e-12
+            );
+            for s in [0.1, 1.0, 3.0] {
+                // ∫ R_d(√(r² + s²)) 2πr dr × gain, numerically, against the total.
+                let (mut sum, n, top) = (0.0, 200_000, 400.0);
+                for i in 0..n {
+                    let r = (i as f64 + 0.5) * top / n as f64;
+                    sum += d.rd(softened_distance(r, s)) * 2.0 * std::f64::consts::PI * r * top
+                        / n as f64;
+                }
+                let kept = sum * d.softening_gain(s) / d.total_reflectance();
+                assert!((kept - 1.0).abs() < 2e-3, "σ's {sp} s {s}: {kept}");
+            }
+            assert!(d.softening_gain(1e6).is_finite() && d.softening_gain(f64::NAN) == 1.0);
         }
     }
 
