@@ -72,7 +72,8 @@ struct Material {
     // x: GGX α (clamped ≥ optics::specular::MIN_ALPHA); y: metallic; z: a dielectric's F0;
     // w: the base colour texture's layer in `materials.textures`, −1 for none.
     surface: vec4<f32>,
-    // x: the normal map's layer in `materials.normal_maps`, −1 for none; y: its scale.
+    // x: the normal map's layer in `materials.linear_maps`, −1 for none; y: its scale;
+    // z: the occlusion map's layer (R channel), −1 for none; w: its strength.
     maps: vec4<f32>,
     // The specular lobe's directional albedo split E(μ) = F0·A + F90·B at LOBE_TABLE values
     // of μ: entry i is (A, B) in lobe[i / 2].xy (even i) or .zw (odd i).

@@ -6,7 +6,7 @@
 @group(0) @binding(2) var material_textures: texture_2d_array<f32>;
 @group(0) @binding(3) var material_sampler: sampler;
 // Tangent-space normal maps (linear), one layer each.
-@group(0) @binding(4) var normal_maps: texture_2d_array<f32>;
+@group(0) @binding(4) var linear_maps: texture_2d_array<f32>;
 
 struct VertexOut {
     @builtin(position) clip: vec4<f32>,
@@ -28,7 +28,8 @@ struct GBuffer {
     // xyz: the normal blurred over the material's subsurface reach (not renormalised), as
     // n·0.5 + 0.5.
     @location(2) blurred_normal: vec4<f32>,
-    // rgb: radiosity's irradiance (zero without radiosity).
+    // rgb: radiosity's irradiance (zero without radiosity); a: the surface's ambient
+    // occlusion (glTF occlusion map, 1 without one).
     @location(3) irradiance: vec4<f32>,
 }
 
@@ -59,7 +60,8 @@ fn fs_main(in: VertexOut, @builtin(front_facing) front: bool) -> GBuffer {
     // Sampled before anything branches, so the mip level's derivatives are defined.
     let layer = m.surface.w;
     let texel = textureSample(material_textures, material_sampler, in.uv, i32(max(layer, 0.0)));
-    let bump = textureSample(normal_maps, material_sampler, in.uv, i32(max(m.maps.x, 0.0)));
+    let bump = textureSample(linear_maps, material_sampler, in.uv, i32(max(m.maps.x, 0.0)));
+    let occluded = textureSample(linear_maps, material_sampler, in.uv, i32(max(m.maps.z, 0.0))).r;
     if (!front && m.double_sided == 0u) {
         discard;
     }
@@ -92,7 +94,11 @@ fn fs_main(in: VertexOut, @builtin(front_facing) front: bool) -> GBuffer {
         }
     }
     g.albedo = vec4<f32>(albedo, f32(in.material + 1u) / 255.0);
-    g.irradiance = vec4<f32>(in.irradiance, 0.0);
+    var ao = 1.0;
+    if (m.maps.z >= 0.0) {
+        ao = 1.0 + m.maps.w * (occluded - 1.0);
+    }
+    g.irradiance = vec4<f32>(in.irradiance, ao);
     g.blurred_normal = vec4<f32>(clamp(blurred, vec3<f32>(-1.0), vec3<f32>(1.0)) * 0.5 + 0.5, 0.0);
     return g;
 }

@@ -172,8 +172,11 @@ fn shade(p: vec2<i32>) {
         let l = frame.to_light;
         let key = frame.light * shadow_factor(shadow_tex, x, n);
         let cos_i = dot(n, l);
-        // Radiosity's irradiance (direct from area lights + interreflected); zero without it.
-        let gi = textureLoad(irradiance_tex, p, 0).rgb;
+        // Radiosity's irradiance (direct from area lights + interreflected), zero without it;
+        // and the occlusion map's ambient occlusion (1 without one), which dims the ambient sky.
+        let irr = textureLoad(irradiance_tex, p, 0);
+        let gi = irr.rgb;
+        let sky = frame.ambient * irr.a;
         var rung = frame.rung;
         if (m.subsurface == 0u || (rung >= RUNG_HIERARCHICAL && frame.pyramid_ready == 0u)) {
             rung = RUNG_OPAQUE;
@@ -188,12 +191,12 @@ fn shade(p: vec2<i32>) {
             // The ambient light is a uniform sky: the lobe returns E(μ_o) of it, the diffuse
             // part what crosses the interface (so metals are not black where no light hits).
             let e_o = lobe_albedo(m, f0, dot(n, v));
-            let ambient = frame.light * frame.ambient * (diffuse * (1.0 - e_o) + e_o);
+            let ambient = frame.light * sky * (diffuse * (1.0 - e_o) + e_o);
             rgb = key * surface_light(m, f0, diffuse, n, v, l) + extra_lights(m, f0, diffuse, n, v, x)
                 + diffuse * gi + ambient;
         } else {
             let f0 = vec3<f32>(m.surface.z);
-            let ambient = (m.albedo.rgb + lobe_albedo(m, f0, dot(n, v))) * frame.light * frame.ambient;
+            let ambient = (m.albedo.rgb + lobe_albedo(m, f0, dot(n, v))) * frame.light * sky;
             let t_out = transmitted(m, dot(n, v));
             // The interface's reflection of every light, and the extra lights' diffuse part.
             let surface = key * max(cos_i, 0.0) * specular_lobe(m, f0, n, v, l)

@@ -144,7 +144,7 @@ fn a_normal_map_tilts_the_shading_normal_towards_its_tangent() {
         [-1.0, 0.0, -1.0],
     ];
     let scene = quad("bumpy", corners, material, &[[lean, 128, lean]; 4]);
-    assert_eq!(scene.normal_maps.len(), 1);
+    assert_eq!(scene.linear_maps.len(), 1);
     let t = scene.mesh.tangent[0];
     assert!(
         (t[0] - 1.0).abs() < 1e-5 && t[3] != 0.0,
@@ -162,4 +162,44 @@ fn a_normal_map_tilts_the_shading_normal_towards_its_tangent() {
         seen += 1;
     }
     assert!(seen > 100, "{seen} pixels");
+}
+
+#[test]
+fn an_occlusion_map_dims_the_ambient_light_only() {
+    // The same quad three times: fully occluded (R = 0) at strength 1, the same map at
+    // strength 0, and unoccluded (R = 255) at strength 1. The model's default key light and
+    // its ambient sky (0.1) light it.
+    let corners = [
+        [-1.0, 0.0, 1.0],
+        [1.0, 0.0, 1.0],
+        [1.0, 0.0, -1.0],
+        [-1.0, 0.0, -1.0],
+    ];
+    let shade = |name: &str, value: u8, strength: f64| {
+        let material = json!({"occlusionTexture": {"index": 0, "strength": strength},
+            "pbrMetallicRoughness": {"metallicFactor": 0.0, "roughnessFactor": 1.0}});
+        let scene = quad(name, corners, material, &[[value, value, value]; 2]);
+        assert_eq!(scene.material_occlusion_maps[0], Some((0, strength as f32)));
+        let img = render(scene, 48, 36);
+        img.color
+            .iter()
+            .zip(&img.normal_distance)
+            .filter(|(_, nd)| nd[3] > 0.0)
+            .map(|(c, _)| c[1])
+            .collect::<Vec<f32>>()
+    };
+    let dark = shade("occluded", 0, 1.0);
+    let plain = shade("ignored", 0, 0.0);
+    let open = shade("open", 255, 1.0);
+    assert!(dark.len() > 100 && dark.len() == plain.len() && plain.len() == open.len());
+    for ((d, p), o) in dark.iter().zip(&plain).zip(&open) {
+        assert!(
+            p - d > 0.05 && p - d < 0.15,
+            "the ambient sky's share: {p} − {d}"
+        );
+        assert!(
+            (o - p).abs() < 2e-3,
+            "an unoccluded map changes nothing: {o} vs {p}"
+        );
+    }
 }

@@ -20,7 +20,7 @@ pub struct GpuMaterial {
     pub alpha: [f32; 4],
     /// GGX α, metallic, dielectric F0, base colour texture layer (−1: none).
     pub surface: [f32; 4],
-    /// Normal map layer (−1: none), its scale.
+    /// Normal map layer (−1: none), its scale, occlusion map layer (−1: none), its strength.
     pub maps: [f32; 4],
     /// The lobe's directional-albedo table, two (A, B) entries per vec4.
     pub lobe: [[f32; 4]; ALBEDO_TABLE / 2],
@@ -59,10 +59,19 @@ pub fn gpu_materials(scene: &Scene, plan: Option<&Plan>) -> Vec<GpuMaterial> {
                 .copied()
                 .flatten()
                 .map_or(-1.0, |layer| layer as f32);
-            let maps = match scene.material_normal_maps.get(id).copied().flatten() {
-                Some((layer, scale)) => [layer as f32, scale, 0.0, 0.0],
-                None => [-1.0, 1.0, 0.0, 0.0],
-            };
+            let (normal, scale) = scene
+                .material_normal_maps
+                .get(id)
+                .copied()
+                .flatten()
+                .map_or((-1.0, 1.0), |(layer, k)| (layer as f32, k));
+            let (occlusion, strength) = scene
+                .material_occlusion_maps
+                .get(id)
+                .copied()
+                .flatten()
+                .map_or((-1.0, 0.0), |(layer, k)| (layer as f32, k));
+            let maps = [normal, scale, occlusion, strength];
             match m {
                 Material::Opaque { .. } => GpuMaterial {
                     albedo: rgba(albedo),

@@ -61,9 +61,9 @@ impl SceneGpu {
         };
         resources.buffer("photons.nodes", nodes);
         resources.buffer("lights.scene", super::lights::upload(device, &scene));
-        let (textures, normal_maps, sampler) = super::textures::upload(device, queue, &scene);
+        let (textures, linear_maps, sampler) = super::textures::upload(device, queue, &scene);
         resources.texture_array("materials.textures", textures);
-        resources.texture_array("materials.normal_maps", normal_maps);
+        resources.texture_array("materials.linear_maps", linear_maps);
         resources.sampler("materials.sampler", sampler);
         let shadow = if crate::scene::Plan::of(&scene, 1, 1).shadows {
             Some(ShadowMap::new(device, pipelines)?)

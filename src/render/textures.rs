@@ -25,7 +25,7 @@ pub fn upload(
     let normals = array(
         device,
         queue,
-        &scene.normal_maps,
+        &scene.linear_maps,
         wgpu::TextureFormat::Rgba8Unorm,
     );
     (base, normals, sampler(device))

@@ -56,8 +56,9 @@ pub fn build_with(
     let mut lights = file.lights.clone();
     let mut textures = Vec::new();
     let mut material_textures: Vec<Option<u32>> = Vec::new();
-    let mut normal_maps = Vec::new();
+    let mut linear_maps = Vec::new();
     let mut material_normal_maps: Vec<Option<(u32, f32)>> = Vec::new();
+    let mut material_occlusion_maps: Vec<Option<(u32, f32)>> = Vec::new();
     let mut notes = Vec::new();
     let mut mesh = Mesh::default();
     let mut placed = Vec::new();
@@ -143,15 +144,16 @@ pub fn build_with(
                     let first_texture = textures.len() as u32;
                     textures.extend(imported.textures.iter().cloned());
                     material_textures.resize(base, None);
-                    let first_normal = normal_maps.len() as u32;
-                    normal_maps.extend(imported.normal_maps.iter().cloned());
+                    let first_normal = linear_maps.len() as u32;
+                    linear_maps.extend(imported.linear_maps.iter().cloned());
                     material_normal_maps.resize(base, None);
-                    material_normal_maps.extend(
-                        imported
-                            .material_normal_maps
-                            .iter()
-                            .map(|n| n.map(|(layer, scale)| (first_normal + layer as u32, scale))),
-                    );
+                    material_occlusion_maps.resize(base, None);
+                    let shift = |n: &Option<(usize, f32)>| {
+                        n.map(|(layer, k)| (first_normal + layer as u32, k))
+                    };
+                    material_normal_maps.extend(imported.material_normal_maps.iter().map(shift));
+                    material_occlusion_maps
+                        .extend(imported.material_occlusion_maps.iter().map(shift));
                     for ((name, spec), tex) in
                         imported.materials.iter().zip(&imported.material_textures)
                     {
@@ -252,6 +254,7 @@ pub fn build_with(
     file.lights = lights;
     material_textures.resize(materials.len(), None);
     material_normal_maps.resize(materials.len(), None);
+    material_occlusion_maps.resize(materials.len(), None);
     Ok(Scene {
         file,
         mesh,
@@ -260,8 +263,9 @@ pub fn build_with(
         notes,
         textures,
         material_textures,
-        normal_maps,
+        linear_maps,
         material_normal_maps,
+        material_occlusion_maps,
     })
 }
 

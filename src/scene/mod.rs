@@ -122,9 +122,12 @@ pub struct Scene {
     /// Base colour textures, and for each material the one it uses (the mesh's `uv` reads it).
     pub textures: Vec<TextureImage>,
     pub material_textures: Vec<Option<u32>>,
-    /// Tangent-space normal maps, and for each material the one it uses with its scale.
-    pub normal_maps: Vec<TextureImage>,
+    /// Linear maps (tangent-space normals, occlusion), and for each material the normal map it
+    /// uses with its scale.
+    pub linear_maps: Vec<TextureImage>,
     pub material_normal_maps: Vec<Option<(u32, f32)>>,
+    /// For each material its occlusion map (a `linear_maps` layer, R) and strength.
+    pub material_occlusion_maps: Vec<Option<(u32, f32)>>,
 }
 
 /// The built-in scenes' names, default first.

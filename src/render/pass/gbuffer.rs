@@ -69,7 +69,7 @@ pub const PASS: PassDecl = PassDecl {
         read("materials.scene"),
         texture_array("materials.textures"),
         sampler("materials.sampler"),
-        texture_array("materials.normal_maps"),
+        texture_array("materials.linear_maps"),
     ],
     attachments: &[
         "gbuffer.normal_distance",

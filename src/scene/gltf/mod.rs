@@ -72,10 +72,12 @@ pub struct Imported {
     pub material_textures: Vec<Option<usize>>,
     /// Decoded base colour textures (sRGB RGBA8).
     pub textures: Vec<crate::scene::TextureImage>,
-    /// Normal map of each material (index into `normal_maps`) with its scale.
+    /// Normal map of each material (index into `linear_maps`) with its scale.
     pub material_normal_maps: Vec<Option<(usize, f32)>>,
-    /// Decoded tangent-space normal maps (linear RGBA8).
-    pub normal_maps: Vec<crate::scene::TextureImage>,
+    /// Occlusion map of each material (index into `linear_maps`) with its strength.
+    pub material_occlusion_maps: Vec<Option<(usize, f32)>>,
+    /// Decoded linear maps: tangent-space normals, occlusion (R).
+    pub linear_maps: Vec<crate::scene::TextureImage>,
     /// Lights in the file's photometric units (lux, candela); `scene::model` scales them.
     pub lights: Vec<LightSpec>,
     pub camera: Option<Camera>,
@@ -140,7 +142,7 @@ pub fn import_bytes(
     let doc = gltf::Document::from_json(root).map_err(|e| GltfError::Invalid(e.to_string()))?;
     let buffers = load_buffers(&doc, blob, base, folder)?;
     let textures = Textures::new(&doc, &buffers, base, folder, &mut imported.notes);
-    // Texture indices already added to `imported.textures` / `normal_maps`, in order.
+    // Texture indices already added to `imported.textures` / `linear_maps`, in order.
     let mut used: Vec<usize> = Vec::new();
     let mut used_normals: Vec<usize> = Vec::new();
     for (i, m) in doc.materials().enumerate() {
@@ -158,15 +160,17 @@ pub fn import_bytes(
             ),
             material: m.clone(),
         };
-        if m.occlusion_texture().is_some() {
-            imported
-                .notes
-                .push(format!("material {i}: its occlusion map is not used"));
-        }
+        let occlusion = m.occlusion_texture().and_then(|t| {
+            let index = t.texture().index();
+            let image = textures.get(index)?;
+            let layer = add_once(&mut used_normals, &mut imported.linear_maps, index, image);
+            Some((layer, t.strength()))
+        });
+        imported.material_occlusion_maps.push(occlusion);
         let normal = m.normal_texture().and_then(|t| {
             let index = t.texture().index();
             let image = textures.get(index)?;
-            let layer = add_once(&mut used_normals, &mut imported.normal_maps, index, image);
+            let layer = add_once(&mut used_normals, &mut imported.linear_maps, index, image);
             Some((layer, t.scale()))
         });
         imported.material_normal_maps.push(normal);
@@ -186,6 +190,7 @@ pub fn import_bytes(
     let default_material = imported.materials.len();
     imported.material_textures.push(None);
     imported.material_normal_maps.push(None);
+    imported.material_occlusion_maps.push(None);
     imported.materials.push((
         "default".into(),
         MaterialSpec::Opaque {
@@ -229,7 +234,11 @@ pub fn import_bytes(
                     .and_then(|t| textures.get(t.texture().index()).map(|_| t.tex_coord()));
                 let normal_set = pm
                     .normal_texture()
-                    .and_then(|t| textures.get(t.texture().index()).map(|_| t.tex_coord()));
+                    .and_then(|t| textures.get(t.texture().index()).map(|_| t.tex_coord()))
+                    .or_else(|| {
+                        pm.occlusion_texture()
+                            .and_then(|t| textures.get(t.texture().index()).map(|_| t.tex_coord()))
+                    });
                 if let (Some(a), Some(b)) = (base_set, normal_set) {
                     if a != b {
                         imported.notes.push(format!(
@@ -390,6 +399,8 @@ impl Textures {
                     || is(pbr.metallic_roughness_texture())
                     || m.normal_texture()
                         .is_some_and(|n| n.texture().index() == t.index())
+                    || m.occlusion_texture()
+                        .is_some_and(|o| o.texture().index() == t.index())
             })
         };
         let decoded = doc
