@@ -333,3 +333,43 @@ fn emissive_gltf_materials_become_area_lights_with_their_strength() {
     assert!(s.has_emitter(), "radiosity's auto mode sees an emitter");
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+#[test]
+fn the_bunny_scenes_as_gltf_carry_jensens_media_through_the_volume_mapping() {
+    // tools/make_scenes.py writes marble and skin1 as base colour + volume attenuation; the
+    // loader's mapping (docs/scenes.md) must give back Jensen's coefficients.
+    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/models");
+    let folder = Folder::open(&dir).unwrap();
+    for (file, medium) in [("marble-bunny.glb", "marble"), ("skin-bunny.glb", "skin1")] {
+        let s = Scene::load(&dir.join(file), &folder).unwrap();
+        let (_, want_s, want_a) = fovea::scene::material::JENSEN_2001
+            .iter()
+            .find(|(n, _, _)| *n == medium)
+            .unwrap();
+        let Material::Translucent {
+            sigma_s_prime,
+            sigma_a,
+            eta,
+            ..
+        } = &s.materials[0].1
+        else {
+            panic!("{file}: {:?}", s.materials[0].1)
+        };
+        assert!((eta - 1.3).abs() < 1e-6);
+        for c in 0..3 {
+            let rel = |a: f64, b: f64| (a - b).abs() / b;
+            assert!(
+                rel(sigma_s_prime[c], want_s[c]) < 0.01,
+                "{file} σ's[{c}] {} vs {}",
+                sigma_s_prime[c],
+                want_s[c]
+            );
+            assert!(
+                rel(sigma_a[c], want_a[c]) < 0.01,
+                "{file} σa[{c}] {} vs {}",
+                sigma_a[c],
+                want_a[c]
+            );
+        }
+    }
+}

@@ -279,6 +279,48 @@ def lamps(bunny):
     return g
 
 
+# Jensen et al. 2001's measured media (σ's, σa per mm), as in src/scene/material.rs.
+JENSEN = {"marble": ([2.19, 2.62, 3.00], [0.0021, 0.0041, 0.0071]),
+          "skin1": ([0.74, 0.88, 1.01], [0.032, 0.17, 0.48])}
+
+
+def jensen_volume(sigma_s, sigma_a, eta=1.3):
+    """glTF base colour and KHR_materials_volume attenuation that Fovea's mapping
+    (docs/scenes.md, "glTF materials") turns back into exactly these coefficients: the base
+    colour is the dipole's total diffuse reflectance (which fixes α' = σ's/σ't), and Beer's law
+    over attenuationDistance gives σa. The distance is chosen so the darkest channel keeps 10⁻³."""
+    fdr = -1.440 / eta ** 2 + 0.710 / eta + 0.668 + 0.0636 * eta
+    a = (1 + fdr) / (1 - fdr)
+    colour = []
+    for ss, sa in zip(sigma_s, sigma_a):
+        alpha = ss / (ss + sa)
+        t = math.sqrt(3 * (1 - alpha))
+        colour.append(0.5 * alpha * (1 + math.exp(-4 / 3 * a * t)) * math.exp(-t))
+    distance_mm = math.log(1000.0) / max(sigma_a)
+    attenuation = [math.exp(-sa * distance_mm) for sa in sigma_a]
+    return colour, distance_mm / 1000.0, attenuation
+
+
+def bunny_scene(bunny, medium, to_light, light_colour):
+    """A built-in bunny scene as glTF: the bunny in `medium`, back-lit, its camera."""
+    g = Glb()
+    colour, distance, attenuation = jensen_volume(*JENSEN[medium])
+    m = g.material(
+        {"name": medium, "pbrMetallicRoughness": {"baseColorFactor": colour + [1.0],
+                                                  "metallicFactor": 0.0, "roughnessFactor": 0.3}},
+        {"KHR_materials_diffuse_transmission": {"diffuseTransmissionFactor": 1.0},
+         "KHR_materials_volume": {"thicknessFactor": 0.05, "attenuationDistance": distance,
+                                  "attenuationColor": attenuation},
+         "KHR_materials_ior": {"ior": 1.3}})
+    g.node({"mesh": g.mesh("bunny", bunny[0], bunny[1], m)})
+    key = g.light({"type": "directional", "name": "back light", "color": light_colour, "intensity": 2.5})
+    g.node({"light": key, "rotation": look_rotation(to_light, [0, 0, 0])})
+    g.doc["cameras"] = [{"type": "perspective", "perspective": {"yfov": math.radians(32), "znear": 0.01, "zfar": 1.0}}]
+    eye = [0.0, 0.07, 0.24]
+    g.node({"camera": 0, "translation": eye, "rotation": look_rotation(eye, [0.0, 0.046, 0.0])})
+    return g
+
+
 if __name__ == "__main__":
     bunny = read_ply(os.path.join(ROOT, "assets", "meshes", "bunny.ply"))
     # The scan is ~9.7 units tall: make it a 15 cm bunny standing on y = 0, centred in x, z.
@@ -289,3 +331,9 @@ if __name__ == "__main__":
     # The gallery is a built-in scene (the default); lamps is an example model to serve.
     gallery(bunny).write(os.path.join(ROOT, "assets", "scenes", "gallery.glb"))
     lamps(bunny).write(os.path.join(ROOT, "assets", "models", "lamps.glb"))
+    # bunny-marble and bunny-skin as glTF (the scan at its own size: 9.7 cm, in metres).
+    raw = read_ply(os.path.join(ROOT, "assets", "meshes", "bunny.ply"))
+    cm = ([(x * 0.01, y * 0.01, z * 0.01) for x, y, z in raw[0]], raw[1])
+    for medium, name in [("marble", "marble-bunny"), ("skin1", "skin-bunny")]:
+        bunny_scene(cm, medium, [0.35, 0.45, -0.82], [1.0, 0.96, 0.9]).write(
+            os.path.join(ROOT, "assets", "models", name + ".glb"))
