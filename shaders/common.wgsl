@@ -362,6 +362,10 @@ struct Photons {
     // x: map side N; y: area one texel covers perpendicular to the light (mm²);
     // z: texel size (scene units); w: pyramid level being built (reduce entry point).
     params: vec4<f32>,
+    // The key light's shadow map (world → map) and (depth bias, normal offset, 1 when photons
+    // are tested against it, side).
+    shadow_view_proj: mat4x4<f32>,
+    shadow_params: vec4<f32>,
 }
 
 // Depth under the gaze, from the G-buffer's normal + distance: what the eye focuses on. Off the

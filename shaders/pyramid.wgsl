@@ -13,6 +13,19 @@
 @group(0) @binding(5) var photon_normal: texture_2d<f32>;
 @group(0) @binding(6) var<storage, read_write> nodes: array<PhotonNode>;
 @group(0) @binding(7) var photon_irradiance: texture_2d<f32>;
+@group(0) @binding(8) var shadow_map: texture_2d<f32>;
+
+// How much of the key light reaches a photon: an opaque object between the light and a
+// translucent one keeps its light out (the photon map itself only holds translucent surfaces).
+fn photon_visibility(x: vec3<f32>, n: vec3<f32>) -> f32 {
+    let sp = photons.shadow_params;
+    if (sp.z == 0.0) {
+        return 1.0;
+    }
+    let p = photons.shadow_view_proj * vec4<f32>(x + n * sp.y, 1.0);
+    let uv = vec2<f32>(p.x * 0.5 + 0.5, 0.5 - p.y * 0.5) * sp.w - 0.5;
+    return pcf(shadow_map, uv, p.z - sp.x, vec2<i32>(0), vec2<i32>(i32(sp.w) - 1));
+}
 
 @compute @workgroup_size(8, 8)
 fn leaves(@builtin(global_invocation_id) id: vec3<u32>) {
@@ -29,7 +42,8 @@ fn leaves(@builtin(global_invocation_id) id: vec3<u32>) {
     if (pos.w > 0.5 && nrm.w > 0.5) {
         let m = materials[u32(round(nrm.w)) - 1u];
         let cos_i = dot(nrm.xyz, photons.to_light.xyz);
-        var flux = photons.light.rgb * transmitted_always(m, cos_i) * photons.params.y;
+        let seen = photon_visibility(pos.xyz, nrm.xyz);
+        var flux = photons.light.rgb * seen * transmitted_always(m, cos_i) * photons.params.y;
         // Radiosity's irradiance arrives from every direction: it enters the texel's whole
         // footprint on the surface (A⊥ / cos, the slant bounded as for the extent), through
         // the interface's transmission at 60° incidence, the cosine-weighted hemisphere's median.

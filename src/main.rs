@@ -293,7 +293,12 @@ fn serve(addr: SocketAddr, options: fovea::server::ServerOptions) -> Result<()> 
         .context("loading the default scene")?;
     // Scenes from --scenes folders go onto the GPU now (built-in ones are small), so the first
     // viewer of a large model does not hold the render thread, and every session, while it loads.
-    for entry in options.catalog.entries().iter().filter(|e| e.file.is_some()) {
+    for entry in options
+        .catalog
+        .entries()
+        .iter()
+        .filter(|e| e.file.is_some())
+    {
         if let Err(e) = renderer.load_scene(&entry.name) {
             tracing::error!("scene {} does not load onto the GPU: {e}", entry.name);
         }

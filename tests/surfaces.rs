@@ -416,3 +416,48 @@ async fn a_served_folder_offers_its_scenes_by_name_and_leaves_broken_ones_out() 
     running.stop().await;
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+#[test]
+fn an_opaque_roof_keeps_the_light_out_of_a_translucent_slab_below_it() {
+    let mut r = renderer();
+    // A marble slab (a quad) under an opaque roof that covers it, the key light straight above.
+    let scene = scene_json(
+        "roofed",
+        json!([
+            {"mesh": "quad", "material": "marble", "corners": [[-2, 0, -2], [-2, 0, 2], [2, 0, 2], [2, 0, -2]]},
+            {"mesh": "quad", "material": "roof", "corners": [[-3, 2, -3], [-3, 2, 3], [3, 2, 3], [3, 2, -3]]}
+        ]),
+        json!({"marble": {"kind": "translucent", "preset": "marble"},
+               "roof": {"kind": "opaque", "albedo": [0.5, 0.5, 0.5]}}),
+        json!({"eye": [0, 1, 8], "target": [0, 0, 0], "fov_y_deg": 50, "near": 0.1, "far": 100}),
+        [0.0, 1.0, 0.0],
+        0.0,
+    );
+    r.add_scene(scene).unwrap();
+    let mut flux = |shadows: bool, stream: u64| {
+        let mut q = full("roofed", 64, 48, stream);
+        q.settings.translucency.rung = fovea::settings::Rung::BruteForce;
+        q.settings.shadows = shadows;
+        let img = render(&mut r, &q);
+        // Photons the slab holds (a texel it covers has an extent), lit or not.
+        let photons = img.photons.iter().filter(|p| p[3] > 0.0).count();
+        (
+            img.photons
+                .iter()
+                .map(|p| f64::from(p[4] + p[5] + p[6]))
+                .sum::<f64>(),
+            photons,
+        )
+    };
+    let (open, n) = flux(false, 1);
+    let (roofed, n_roofed) = flux(true, 2);
+    assert!(n > 1000 && open > 0.0, "{n} photons carry {open}");
+    assert_eq!(
+        n, n_roofed,
+        "the light still sees the slab's photons; the roof stops their light"
+    );
+    assert!(
+        roofed < 1e-3 * open,
+        "under the roof the photons carry {roofed} of {open}"
+    );
+}

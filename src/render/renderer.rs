@@ -231,6 +231,8 @@ impl Renderer {
             to_light,
             gi_version: sg.gi_version,
             indirect: req.settings.indirect,
+            // The key map is built (below, first) whenever shadows are on and the scene has it.
+            shadowed: req.settings.shadows && sg.shadow.is_some(),
         };
         let device = &self.gpu.device;
         let encoder = || {

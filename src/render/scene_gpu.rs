@@ -39,12 +39,43 @@ impl SceneGpu {
             "materials.scene",
             &super::materials::gpu_materials(&scene, None),
         );
+        // The shadow maps first: the photon pass tests its photons against the key light's.
+        let mut maps = Resources::default();
+        let shadow = if crate::scene::Plan::of(&scene, 1, 1).shadows {
+            Some(ShadowMap::new(device, pipelines)?)
+        } else {
+            None
+        };
+        for name in ["shadow.depth", "shadow.spots"] {
+            let map = shadow
+                .as_ref()
+                .and_then(|m| m.resources.get_texture(name).map(|(t, _)| t.clone()));
+            // Bound in place of a map the scene has none of (the shader is told not to look).
+            let map = map.unwrap_or_else(|| {
+                super::gpu::texture_2d(
+                    device,
+                    "shadow.none",
+                    (1, 1),
+                    wgpu::TextureFormat::R32Float,
+                    wgpu::TextureUsages::TEXTURE_BINDING,
+                )
+            });
+            maps.texture(name, map);
+        }
+        let key_map = maps
+            .get_texture("shadow.depth")
+            .map(|(t, _)| t.clone())
+            .ok_or(GraphError::Missing {
+                pass: "shadow",
+                name: "shadow.depth",
+            })?;
         let photons = if scene.has_translucency() {
-            Some(photon_pass.create_map(device, pipelines, &materials)?)
+            Some(photon_pass.create_map(device, pipelines, &materials, &key_map)?)
         } else {
             None
         };
         let mut resources = Resources::default();
+        resources.extend(&maps);
         resources.buffer(
             "scene.reach",
             super::materials::upload_reach(device, &scene),
@@ -65,27 +96,6 @@ impl SceneGpu {
         resources.texture_array("materials.textures", textures);
         resources.texture_array("materials.linear_maps", linear_maps);
         resources.sampler("materials.sampler", sampler);
-        let shadow = if crate::scene::Plan::of(&scene, 1, 1).shadows {
-            Some(ShadowMap::new(device, pipelines)?)
-        } else {
-            None
-        };
-        for name in ["shadow.depth", "shadow.spots"] {
-            let map = shadow
-                .as_ref()
-                .and_then(|m| m.resources.get_texture(name).map(|(t, _)| t.clone()));
-            // Bound in place of a map the scene has none of (the shader is told not to look).
-            let map = map.unwrap_or_else(|| {
-                super::gpu::texture_2d(
-                    device,
-                    "shadow.none",
-                    (1, 1),
-                    wgpu::TextureFormat::R32Float,
-                    wgpu::TextureUsages::TEXTURE_BINDING,
-                )
-            });
-            resources.texture(name, map);
-        }
         resources.buffer("materials.scene", materials);
         tracing::info!(scene = %scene.name(), triangles = scene.mesh.triangle_count(), translucent = scene.has_translucency(), "scene loaded");
         let radiosity = start_radiosity(&scene);

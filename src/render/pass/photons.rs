@@ -42,6 +42,10 @@ struct PhotonUniform {
     to_light: [f32; 4],
     light: [f32; 4],
     params: [f32; 4],
+    /// The key light's shadow map: world → map, and (depth bias, normal offset, 1 when the
+    /// photons test it, side), as in the frame uniform.
+    shadow_view_proj: [[f32; 4]; 4],
+    shadow_params: [f32; 4],
 }
 
 pub fn node_count() -> u64 {
@@ -72,6 +76,8 @@ pub struct PhotonInputs {
     pub to_light: Vec3,
     pub gi_version: u64,
     pub indirect: bool,
+    /// Photons behind an opaque occluder (the key light's shadow map) carry no light.
+    pub shadowed: bool,
 }
 
 fn raster_pipeline(device: &wgpu::Device, pipelines: &mut Pipelines) -> wgpu::RenderPipeline {
@@ -106,6 +112,7 @@ impl PhotonPass {
         device: &wgpu::Device,
         pipelines: &mut Pipelines,
         materials: &wgpu::Buffer,
+        shadow: &wgpu::Texture,
     ) -> Result<PhotonMap, GraphError> {
         use wgpu::BufferUsages as B;
         use wgpu::TextureFormat as F;
@@ -149,6 +156,7 @@ impl PhotonPass {
             buffer("pyramid.levels", levels, B::UNIFORM | B::COPY_DST),
         );
         r.buffer("materials.scene", materials.clone());
+        r.texture("shadow.depth", shadow.clone());
         let routes = Routes::default();
         let raster_bind = r.bind(device, &pipelines.layout(&PASS), &PASS, &routes)?;
         let pyramid_bind = r.bind(
@@ -243,6 +251,7 @@ impl PhotonPass {
 /// The light camera: orthographic, around the translucent objects' bounding sphere.
 fn photon_uniform(scene: &Scene, inputs: PhotonInputs) -> PhotonUniform {
     let to_light = inputs.to_light;
+    let shadow = super::shadow::shadow_view(scene, to_light);
     let (centre, radius) = translucent_bounds(scene);
     let up = if to_light.cross(Vec3::Y).length() < 1e-3 {
         Vec3::X
@@ -263,6 +272,13 @@ fn photon_uniform(scene: &Scene, inputs: PhotonInputs) -> PhotonUniform {
             .extend(0.0)
             .to_array(),
         params: [SIDE as f32, (texel * mm) * (texel * mm), texel, 0.0],
+        shadow_view_proj: shadow.view_proj.to_cols_array_2d(),
+        shadow_params: [
+            shadow.params[0],
+            shadow.params[1],
+            f32::from(u8::from(inputs.shadowed)),
+            shadow.params[3],
+        ],
     }
 }
 

@@ -21,6 +21,7 @@ pub const PASS: PassDecl = PassDecl {
         texture("photons.normal"),
         write("photons.nodes"),
         texture("photons.irradiance"),
+        texture("shadow.depth"),
     ],
     attachments: &[],
     entry_points: &["leaves", "reduce"],
