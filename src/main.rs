@@ -225,7 +225,7 @@ fn main() -> Result<()> {
         } => {
             let own = scene_file
                 .or(model)
-                .map(|path| load_own_scene(&path))
+                .map(|path| cli::scenes::load_own_scene(&path))
                 .transpose()?;
             let scene = own.as_ref().map_or(scene, |s| s.name().to_string());
             if explain {
@@ -348,21 +348,6 @@ async fn stop_on_signal(shutdown: CancellationToken) {
     let _ = ctrl_c.await;
     tracing::info!("shutting down: closing sessions");
     shutdown.cancel();
-}
-
-/// A scene file or model from the command line, confined to the folder it is in.
-fn load_own_scene(path: &std::path::Path) -> Result<fovea::scene::Scene> {
-    let dir = match path.parent() {
-        Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
-        _ => PathBuf::from("."),
-    };
-    let folder = fovea::scene::Folder::open(&dir)?;
-    let scene = fovea::scene::Scene::load(path, &folder)
-        .with_context(|| format!("loading {}", path.display()))?;
-    for note in &scene.notes {
-        eprintln!("note: {note}");
-    }
-    Ok(scene)
 }
 
 fn render(

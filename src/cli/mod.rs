@@ -5,3 +5,4 @@ pub mod gaze;
 pub mod load;
 pub mod parse;
 pub mod radiosity;
+pub mod scenes;
