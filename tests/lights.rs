@@ -2,11 +2,14 @@
 //! the surface model `optics::specular::surface`): a floor under a point light and a spot light,
 //! the key light off. Software Vulkan adapter; no adapter is a failure.
 
+mod common;
+
+use common::view_ray;
 use fovea::optics::{lights::punctual, specular};
 use fovea::render::{FrameRequest, Renderer};
 use fovea::scene::Scene;
 use fovea::settings::{Preset, RenderSettings};
-use glam::{Vec3, Vec4};
+use glam::Vec3;
 use serde_json::json;
 
 #[test]
@@ -37,9 +40,7 @@ fn point_and_spot_lights_on_the_gpu_match_their_cpu_twin() {
     req.marker = false;
     r.render(&req).unwrap();
     let img = r.inspect(req.stream, "lamps", w, h).unwrap();
-    let cam = scene.file.camera;
-    let inv = cam.view_proj(w, h).inverse();
-    let eye = Vec3::from(cam.eye);
+    let eye = Vec3::from(scene.file.camera.eye);
     let surface = scene.materials[0].1.surface().copied().unwrap();
     let alpha = specular::alpha(surface.roughness);
     let table = specular::directional_albedo_table(alpha);
@@ -49,9 +50,7 @@ fn point_and_spot_lights_on_the_gpu_match_their_cpu_twin() {
         if nd[3] <= 0.0 {
             continue;
         }
-        let (x, y) = ((k as u32 % w) as f32 + 0.5, (k as u32 / w) as f32 + 0.5);
-        let far = inv * Vec4::new(x / w as f32 * 2.0 - 1.0, 1.0 - y / h as f32 * 2.0, 1.0, 1.0);
-        let ray = (far.truncate() / far.w - eye).normalize();
+        let ray = view_ray(&scene, w, h, k);
         let p = eye + ray * nd[3];
         let n = Vec3::new(nd[0], nd[1], nd[2]).as_dvec3();
         let v = -ray.as_dvec3();

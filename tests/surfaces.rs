@@ -5,11 +5,12 @@
 mod common;
 
 use common::images::LAVAPIPE;
+use common::view_ray;
 use fovea::optics::specular;
 use fovea::render::{FrameRequest, Inspection, Renderer};
 use fovea::scene::{Folder, Scene};
 use fovea::settings::{Preset, RenderSettings};
-use glam::{Vec3, Vec4};
+use glam::Vec3;
 use serde_json::json;
 
 fn renderer() -> Renderer {
@@ -28,15 +29,6 @@ fn render(r: &mut Renderer, req: &FrameRequest) -> Inspection {
     r.render(req).unwrap();
     r.inspect(req.stream, &req.scene, req.width, req.height)
         .unwrap()
-}
-
-/// Unit view ray through pixel k's centre.
-fn ray(scene: &Scene, w: u32, h: u32, k: usize) -> Vec3 {
-    let cam = scene.file.camera;
-    let inv = cam.view_proj(w, h).inverse();
-    let (x, y) = ((k as u32 % w) as f32 + 0.5, (k as u32 / w) as f32 + 0.5);
-    let far = inv * Vec4::new(x / w as f32 * 2.0 - 1.0, 1.0 - y / h as f32 * 2.0, 1.0, 1.0);
-    (far.truncate() / far.w - Vec3::from(cam.eye)).normalize()
 }
 
 fn scene_json(
@@ -96,7 +88,7 @@ fn ggx_shading_on_the_gpu_matches_its_cpu_twin() {
                 continue;
             }
             let n = Vec3::new(nd[0], nd[1], nd[2]).as_dvec3();
-            let v = -ray(&scene, w, h, k).as_dvec3();
+            let v = -view_ray(&scene, w, h, k).as_dvec3();
             let l = to_light.as_dvec3();
             let hv = (l + v).normalize();
             for c in 0..3 {
@@ -144,7 +136,7 @@ fn check_floor_shadow(
     let eye = Vec3::from(scene.file.camera.eye);
     let (mut dark, mut open) = (0, 0);
     for (k, nd) in shadowed.normal_distance.iter().enumerate() {
-        let x = eye + ray(scene, w, h, k) * nd[3];
+        let x = eye + view_ray(scene, w, h, k) * nd[3];
         if nd[3] <= 0.0 || x.y.abs() > 1e-3 {
             continue; // not the floor
         }

@@ -12,43 +12,85 @@ use crate::scene::LightSpec;
 /// Distances below this (scene units) count as this, so a point on the light stays finite.
 pub const MIN_DISTANCE: f32 = 1e-4;
 
+/// A punctual light as the shaders see it (`PunctualLight` in `shaders/common.wgsl`): every
+/// kind in one shape, angles already cosines, colour already times intensity.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Punctual {
+    /// 0 directional, 1 point, 2 spot.
+    pub kind: u32,
+    /// The position, or the unit vector towards a directional light.
+    pub at: Vec3,
+    pub radiance: Vec3,
+    /// 0: no range.
+    pub range: f32,
+    /// A spot's axis (away from the light) and its cone's cosines.
+    pub axis: Vec3,
+    pub cos_inner: f32,
+    pub cos_outer: f32,
+}
+
+impl Punctual {
+    pub fn of(light: &LightSpec) -> Punctual {
+        let mut p = Punctual {
+            kind: 0,
+            at: Vec3::ZERO,
+            radiance: Vec3::ZERO,
+            range: 0.0,
+            axis: Vec3::ZERO,
+            cos_inner: 1.0,
+            cos_outer: 1.0,
+        };
+        match *light {
+            LightSpec::Directional {
+                to_light,
+                color,
+                intensity,
+            } => {
+                p.at = Vec3::from(to_light).normalize_or_zero();
+                p.radiance = Vec3::from(color) * intensity;
+            }
+            LightSpec::Point {
+                position,
+                color,
+                intensity,
+                range,
+            } => {
+                (p.kind, p.at, p.range) = (1, position.into(), range.unwrap_or(0.0));
+                p.radiance = Vec3::from(color) * intensity;
+            }
+            LightSpec::Spot {
+                position,
+                direction,
+                color,
+                intensity,
+                range,
+                inner_deg,
+                outer_deg,
+            } => {
+                (p.kind, p.at, p.range) = (2, position.into(), range.unwrap_or(0.0));
+                p.radiance = Vec3::from(color) * intensity;
+                p.axis = Vec3::from(direction).normalize_or_zero();
+                (p.cos_inner, p.cos_outer) =
+                    (inner_deg.to_radians().cos(), outer_deg.to_radians().cos());
+            }
+        }
+        p
+    }
+}
+
 /// (unit vector towards the light, irradiance on a surface facing it) at `x`.
 pub fn punctual(light: &LightSpec, x: Vec3) -> (Vec3, Vec3) {
-    match *light {
-        LightSpec::Directional {
-            to_light,
-            color,
-            intensity,
-        } => (
-            Vec3::from(to_light).normalize_or_zero(),
-            Vec3::from(color) * intensity,
-        ),
-        LightSpec::Point {
-            position,
-            color,
-            intensity,
-            range,
-        } => {
-            let (l, falloff) = point(Vec3::from(position), range, x);
-            (l, Vec3::from(color) * intensity * falloff)
-        }
-        LightSpec::Spot {
-            position,
-            direction,
-            color,
-            intensity,
-            range,
-            inner_deg,
-            outer_deg,
-        } => {
-            let (l, falloff) = point(Vec3::from(position), range, x);
-            let axis = Vec3::from(direction).normalize_or_zero();
-            let (ci, co) = (inner_deg.to_radians().cos(), outer_deg.to_radians().cos());
-            let t = ((-l).dot(axis) - co) / (ci - co).max(1e-6);
-            let t = t.clamp(0.0, 1.0);
-            (l, Vec3::from(color) * intensity * falloff * t * t)
-        }
+    let p = Punctual::of(light);
+    if p.kind == 0 {
+        return (p.at, p.radiance);
     }
+    let range = (p.range > 0.0).then_some(p.range);
+    let (l, mut falloff) = point(p.at, range, x);
+    if p.kind == 2 {
+        let t = ((-l).dot(p.axis) - p.cos_outer) / (p.cos_inner - p.cos_outer).max(1e-6);
+        falloff *= t.clamp(0.0, 1.0).powi(2);
+    }
+    (l, p.radiance * falloff)
 }
 
 fn point(position: Vec3, range: Option<f32>, x: Vec3) -> (Vec3, f32) {

@@ -128,25 +128,13 @@ fn shade(
     let camera = &scene.file.camera;
     let inv = camera.view_proj(width, height).inverse();
     let eye = Vec3::from(camera.eye);
-    // Each material's lobe table, as the renderer uploads it.
-    let tables: Vec<_> = scene
-        .materials
-        .iter()
-        .map(|(_, m)| {
-            m.surface()
-                .map(|s| specular::directional_albedo_table(specular::alpha(s.roughness)))
-        })
-        .collect();
     let background = scene.file.background_srgb;
     let mut rgba = Vec::with_capacity(n * 4);
     let mut covered = Vec::with_capacity(n);
     for k in 0..n {
         let id = g.material[k] as usize;
-        let (Some(surface), Some(table), true) = (
-            scene.materials[id].1.surface(),
-            tables[id].as_ref(),
-            g.depth[k].is_finite(),
-        ) else {
+        let (Some(surface), true) = (scene.materials[id].1.surface(), g.depth[k].is_finite())
+        else {
             // Round-trip so the reference background is exactly what an sRGB clear produces.
             let bg = background.map(|b| linear_to_srgb8(srgb8_to_linear(b)));
             rgba.extend_from_slice(&[bg[0], bg[1], bg[2], 255]);
@@ -169,6 +157,7 @@ fn shade(
         let h = (l + v).normalize();
         let albedo = scene.materials[id].1.albedo();
         let alpha = specular::alpha(surface.roughness);
+        let table = &surface.lobe;
         let c: [f64; 3] = std::array::from_fn(|c| {
             let diffuse = albedo[c] * (1.0 - surface.metallic);
             let f0 = surface.f0[c];

@@ -4,11 +4,8 @@
 use bytemuck::{Pod, Zeroable};
 use wgpu::util::DeviceExt;
 
+use crate::optics::lights::Punctual;
 use crate::scene::{LightSpec, Scene};
-
-pub const DIRECTIONAL: u32 = 0;
-pub const POINT: u32 = 1;
-pub const SPOT: u32 = 2;
 
 #[repr(C)]
 #[derive(Clone, Copy, Pod, Zeroable, Debug, Default, PartialEq)]
@@ -87,49 +84,13 @@ pub fn gpu_light(l: &LightSpec) -> GpuLight {
 }
 
 fn unshadowed(l: &LightSpec) -> GpuLight {
-    let rgb = |c: [f32; 3], i: f32| [c[0] * i, c[1] * i, c[2] * i];
-    let with = |v: [f32; 3], w: f32| [v[0], v[1], v[2], w];
-    match *l {
-        LightSpec::Directional {
-            to_light,
-            color,
-            intensity,
-        } => GpuLight {
-            position_kind: with(
-                glam::Vec3::from(to_light).normalize_or_zero().into(),
-                DIRECTIONAL as f32,
-            ),
-            color_range: with(rgb(color, intensity), 0.0),
-            ..Default::default()
-        },
-        LightSpec::Point {
-            position,
-            color,
-            intensity,
-            range,
-        } => GpuLight {
-            position_kind: with(position, POINT as f32),
-            color_range: with(rgb(color, intensity), range.unwrap_or(0.0)),
-            ..Default::default()
-        },
-        LightSpec::Spot {
-            position,
-            direction,
-            color,
-            intensity,
-            range,
-            inner_deg,
-            outer_deg,
-        } => GpuLight {
-            position_kind: with(position, SPOT as f32),
-            color_range: with(rgb(color, intensity), range.unwrap_or(0.0)),
-            axis_cos_outer: with(
-                glam::Vec3::from(direction).normalize_or_zero().into(),
-                outer_deg.to_radians().cos(),
-            ),
-            cone: [inner_deg.to_radians().cos(), 0.0, 0.0, 0.0],
-            ..Default::default()
-        },
+    let p = Punctual::of(l);
+    GpuLight {
+        position_kind: p.at.extend(p.kind as f32).to_array(),
+        color_range: p.radiance.extend(p.range).to_array(),
+        axis_cos_outer: p.axis.extend(p.cos_outer).to_array(),
+        cone: [p.cos_inner, 0.0, 0.0, 0.0],
+        ..Default::default()
     }
 }
 

@@ -32,7 +32,7 @@ fn interface(m: &Material) -> (u32, [f32; 4], [[f32; 4]; ALBEDO_TABLE / 2]) {
         return (0, [0.0; 4], [[0.0; 4]; ALBEDO_TABLE / 2]);
     };
     let alpha = specular::alpha(s.roughness);
-    let table = specular::directional_albedo_table(alpha);
+    let table = &s.lobe;
     let lobe = std::array::from_fn(|k| {
         let (a, b) = (table[2 * k], table[2 * k + 1]);
         [a[0] as f32, a[1] as f32, b[0] as f32, b[1] as f32]

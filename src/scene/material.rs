@@ -91,6 +91,9 @@ pub struct Surface {
     pub f0: [f64; 3],
     /// F0 of the dielectric part (from the index of refraction), before metal mixes in.
     pub dielectric_f0: f64,
+    /// The lobe's directional-albedo table for this roughness (`optics::specular`), made once
+    /// at load: the GPU upload and the CPU reference both read it.
+    pub lobe: [[f64; 2]; crate::optics::specular::ALBEDO_TABLE],
     pub double_sided: bool,
 }
 
@@ -119,6 +122,9 @@ impl SurfaceSpec {
             metallic,
             f0,
             dielectric_f0: dielectric,
+            lobe: crate::optics::specular::directional_albedo_table(
+                crate::optics::specular::alpha(roughness),
+            ),
             double_sided: self.double_sided,
         })
     }

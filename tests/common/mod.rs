@@ -52,3 +52,14 @@ pub async fn start(options: ServerOptions) -> (SocketAddr, Running) {
         },
     )
 }
+
+/// Unit view ray through pixel `k`'s centre of a `w`×`h` frame of `scene` (what the shaders'
+/// `view_ray` computes), for tests that rebuild a pixel's shading on the CPU.
+pub fn view_ray(scene: &fovea::scene::Scene, w: u32, h: u32, k: usize) -> glam::Vec3 {
+    let cam = scene.file.camera;
+    let inv = cam.view_proj(w, h).inverse();
+    let (x, y) = ((k as u32 % w) as f32 + 0.5, (k as u32 / w) as f32 + 0.5);
+    let ndc = glam::Vec4::new(x / w as f32 * 2.0 - 1.0, 1.0 - y / h as f32 * 2.0, 1.0, 1.0);
+    let far = inv * ndc;
+    (far.truncate() / far.w - glam::Vec3::from(cam.eye)).normalize()
+}
