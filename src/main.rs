@@ -70,6 +70,12 @@ enum Command {
         /// sockets cannot hold session slots.
         #[arg(long, default_value_t = 5.0, value_parser = cli::parse::parse_seconds)]
         hello_timeout_s: f64,
+        /// Seconds a drain (SIGTERM, POST /admin/drain) gives sessions to move to another
+        /// instance: they are sent `goodbye` at once and closed with 1001 when it ends.
+        #[arg(long, default_value_t = 10.0, value_parser = cli::parse::parse_seconds)]
+        drain_s: f64,
+        #[command(flatten)]
+        access: cli::access::AccessArgs,
     },
     /// Render one frame to an image file, without a server.
     ///
@@ -189,16 +195,24 @@ fn main() -> Result<()> {
             max_sessions,
             stall_timeout_s,
             hello_timeout_s,
-        } => serve(
-            addr,
-            fovea::server::ServerOptions {
-                record_dir,
-                max_sessions: max_sessions as usize,
-                stall_timeout: std::time::Duration::from_secs_f64(stall_timeout_s),
-                hello_timeout: std::time::Duration::from_secs_f64(hello_timeout_s),
-                catalog: fovea::scene::Catalog::with_folders(&scenes)?,
-            },
-        ),
+            drain_s,
+            access,
+        } => {
+            let (access, insecure) = access.resolve();
+            fovea::server::check_exposure(addr, &access, insecure).map_err(anyhow::Error::msg)?;
+            serve(
+                addr,
+                fovea::server::ServerOptions {
+                    record_dir,
+                    max_sessions: max_sessions as usize,
+                    stall_timeout: std::time::Duration::from_secs_f64(stall_timeout_s),
+                    hello_timeout: std::time::Duration::from_secs_f64(hello_timeout_s),
+                    catalog: fovea::scene::Catalog::with_folders(&scenes)?,
+                    drain: std::time::Duration::from_secs_f64(drain_s),
+                    access,
+                },
+            )
+        }
         Command::Bench(args) => bench(args),
         Command::Replay(args) => replay(args),
         Command::Gaze(args) => gaze(args),

@@ -21,6 +21,7 @@ async fn server(record: Option<std::path::PathBuf>) -> (String, common::Running)
 fn options(url: &str) -> ReplayOptions {
     ReplayOptions {
         url: url.to_string(),
+        token: None,
         // The opaque scene keeps frames cheap on the software adapter.
         hello: Hello {
             scene: "bunny".into(),

@@ -132,6 +132,7 @@ async fn admission_stalls_and_the_load_report() {
     // The load tool against the same server: fields present, counts agree with /metrics.
     let before = metric(&http_get(addr, "/metrics").await, "fovea_frames_sent_total");
     let opts = LoadOptions {
+        token: None,
         url: url.clone(),
         sessions: 2,
         duration: Duration::from_secs(3),
@@ -195,6 +196,7 @@ async fn load_can_be_driven_by_a_gaze_recording() {
     )
     .unwrap();
     let opts = LoadOptions {
+        token: None,
         url: format!("ws://{addr}/ws"),
         sessions: 2,
         duration: Duration::from_secs(2),
@@ -228,6 +230,7 @@ async fn three_sessions_share_the_renderer_fairly() {
     let (addr, shutdown) = server(ServerOptions::default()).await;
     let url = format!("ws://{addr}/ws");
     let opts = LoadOptions {
+        token: None,
         url,
         sessions: 3,
         duration: Duration::from_secs(4),

@@ -22,6 +22,7 @@ const state = {
   framesShown: 0,     // this session
   totalFrames: 0,     // every session of this page
   connects: 0,
+  moves: 0,           // sessions moved to another instance after a goodbye
   pending: null,      // decoded frame waiting for the next animation frame
   drawScheduled: false,
   stats: new Stats(),
@@ -64,7 +65,10 @@ export function connect() {
   canvas.width = width;
   canvas.height = height;
   const proto = location.protocol === 'https:' ? 'wss' : 'ws';
-  const ws = new WebSocket(`${proto}://${location.host}/ws`);
+  // A server started with --token wants it: the page's own ?token= is passed on.
+  const token = new URLSearchParams(location.search).get('token');
+  const query = token ? `?token=${encodeURIComponent(token)}` : '';
+  const ws = new WebSocket(`${proto}://${location.host}/ws${query}`);
   ws.binaryType = 'arraybuffer';
   state.ws = ws;
   state.connects += 1;
@@ -122,6 +126,13 @@ function onText(text) {
     const link = document.getElementById('recording');
     link.hidden = !msg.recording;
     if (msg.recording) link.href = msg.recording;
+  } else if (msg.type === 'goodbye') {
+    // The server is draining: frames keep coming until we leave, so open the next session
+    // (the balancer picks another instance) after the delay it asked for.
+    showBanner('server is being replaced: moving to another instance…', 'info', 4000);
+    state.moves += 1;
+    clearTimeout(retryTimer);
+    retryTimer = setTimeout(connect, msg.retry_ms);
   } else if (msg.type === 'error') {
     state.errors.push(msg);
     console.warn(`server error ${msg.code}: ${msg.message}`);

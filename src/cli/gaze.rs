@@ -88,6 +88,9 @@ pub struct ReplayArgs {
     /// A non-loopback host this replay may target (repeatable).
     #[arg(long)]
     pub allow_host: Vec<String>,
+    /// The server's session token, sent as `Authorization: Bearer …` (or FOVEA_TOKEN).
+    #[arg(long, env = "FOVEA_TOKEN", hide_env_values = true)]
+    pub token: Option<String>,
     /// Playback speed factor (2 = twice as fast).
     #[arg(long, default_value_t = 1.0)]
     pub speed: f64,
@@ -137,6 +140,7 @@ pub fn replay(a: ReplayArgs) -> Result<()> {
     let url = url_is_allowed(&a.url, &a.allow_host)?;
     let opts = fovea::client::replay::ReplayOptions {
         url,
+        token: a.token.clone(),
         hello: fovea::protocol::Hello {
             scene: a.scene.clone(),
             preset: a.preset.to_string(),

@@ -55,6 +55,9 @@ pub struct LoadArgs {
     /// A non-loopback host this load may target (repeatable).
     #[arg(long)]
     pub allow_host: Vec<String>,
+    /// The server's session token, sent as `Authorization: Bearer …` (or FOVEA_TOKEN).
+    #[arg(long, env = "FOVEA_TOKEN", hide_env_values = true)]
+    pub token: Option<String>,
     /// Folder for load.json and the plots.
     #[arg(long)]
     pub out: PathBuf,
@@ -98,6 +101,7 @@ pub fn load(a: LoadArgs) -> Result<()> {
     for n in counts {
         let opts = fovea::client::load::LoadOptions {
             url: url.clone(),
+            token: a.token.clone(),
             sessions: n,
             duration,
             ramp_up: std::time::Duration::from_secs_f64(a.ramp_up_ms.max(0.0) / 1000.0),

@@ -1,5 +1,6 @@
 //! The subcommands beyond `serve` and `render`, one file each, with the value parsers they share.
 
+pub mod access;
 pub mod bench;
 pub mod gaze;
 pub mod load;

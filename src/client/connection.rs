@@ -9,7 +9,7 @@ use tokio_tungstenite::tungstenite::Message;
 use tokio_tungstenite::{MaybeTlsStream, WebSocketStream};
 
 use crate::protocol::{
-    decode_frame, Ack, ErrorMessage, FrameHeader, Gaze, Hello, ServerMessage, Welcome,
+    decode_frame, Ack, ErrorMessage, FrameHeader, Gaze, Goodbye, Hello, ServerMessage, Welcome,
 };
 
 #[derive(Debug, thiserror::Error)]
@@ -27,6 +27,8 @@ pub enum ClientError {
     Refused(crate::protocol::ErrorCode, String),
     #[error("the server closed the connection")]
     Closed,
+    #[error("the server closed the connection: {0} {1}")]
+    ClosedWith(u16, String),
     #[error("nothing from the server within {0:?}")]
     Timeout(Duration),
 }
@@ -36,6 +38,7 @@ pub enum ClientError {
 pub enum Event {
     Welcome(Welcome),
     Error(ErrorMessage),
+    Goodbye(Goodbye),
     Frame {
         header: FrameHeader,
         image: Vec<u8>,
@@ -50,14 +53,14 @@ pub struct Client {
 
 impl Client {
     pub async fn connect(url: &str) -> Result<Client, ClientError> {
-        // No Nagle: gaze samples and acks are tiny and must leave at once.
-        let (ws, _) = tokio_tungstenite::connect_async_with_config(url, None, true)
-            .await
-            .map_err(|e| ClientError::Connect {
-                url: url.to_string(),
-                source: Box::new(e),
-            })?;
-        Ok(Client { ws })
+        Self::connect_with(url, None).await
+    }
+
+    /// Connects with `Authorization: Bearer token`.
+    pub async fn connect_with(url: &str, token: Option<&str>) -> Result<Client, ClientError> {
+        Ok(Client {
+            ws: super::link::connect(url, token).await?,
+        })
     }
 
     /// Sends raw text: for tests that need to send what a well-behaved client never would.
@@ -88,7 +91,7 @@ impl Client {
                 Event::Welcome(w) => return Ok(w),
                 Event::Error(e) => return Err(ClientError::Refused(e.code, e.message)),
                 Event::Closed(_) => return Err(ClientError::Closed),
-                Event::Frame { .. } => {}
+                Event::Frame { .. } | Event::Goodbye(_) => {}
             }
         }
     }
@@ -121,6 +124,7 @@ impl Client {
                 Message::Text(t) => match serde_json::from_str::<ServerMessage>(t.as_str()) {
                     Ok(ServerMessage::Welcome(w)) => Event::Welcome(w),
                     Ok(ServerMessage::Error(e)) => Event::Error(e),
+                    Ok(ServerMessage::Goodbye(g)) => Event::Goodbye(g),
                     Err(e) => return Err(ClientError::BadMessage(format!("{e}: {t}"))),
                 },
                 Message::Binary(b) => {

@@ -7,18 +7,21 @@ use std::collections::BTreeMap;
 use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
 
-use futures_util::{SinkExt, StreamExt};
 use hdrhistogram::Histogram;
 use serde::Serialize;
-use tokio_tungstenite::tungstenite::Message;
+
+use super::link::LinkEvent;
+use super::ClientError;
 
 use crate::gaze::synthetic::{degrees_to_frame, SyntheticEye};
-use crate::protocol::{decode_frame, Hello, Trigger};
+use crate::protocol::{Hello, Trigger};
 use crate::viewing::Viewing;
 
 #[derive(Debug, Clone)]
 pub struct LoadOptions {
     pub url: String,
+    /// Sent as `Authorization: Bearer …`.
+    pub token: Option<String>,
     pub sessions: usize,
     pub duration: Duration,
     /// Delay between session starts.
@@ -81,6 +84,15 @@ pub struct LoadReport {
     pub connection_error: Option<String>,
     /// Sessions the server refused (close 1013).
     pub refused: u64,
+    /// New sessions opened after a server said goodbye or a connection dropped.
+    pub reconnects: u64,
+    /// From the last frame of a session to the first of its replacement, ms.
+    pub reconnect_gap_ms: Option<Percentiles>,
+    /// Sessions that ended before the run did (gave up reconnecting, closed by the server).
+    pub sessions_ended_early: u64,
+    /// The first such session's reason.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub ended_early_reason: Option<String>,
     /// Frames received per second of the run, all sessions together.
     pub fps_timeline: Vec<u64>,
     #[serde(skip)]
@@ -98,6 +110,10 @@ struct SessionResult {
     /// Why the connection failed, when it did.
     connect_error: Option<String>,
     refused: bool,
+    reconnects: u32,
+    gaps_ms: Vec<f64>,
+    /// Why the session ended before the run did, if it did.
+    ended: Option<String>,
 }
 
 fn histogram() -> Histogram<u64> {
@@ -175,6 +191,16 @@ pub async fn run(
         connection_failures: results.iter().filter(|r| r.connect_failed).count() as u64,
         connection_error: results.iter().find_map(|r| r.connect_error.clone()),
         refused: results.iter().filter(|r| r.refused).count() as u64,
+        reconnects: results.iter().map(|r| u64::from(r.reconnects)).sum(),
+        reconnect_gap_ms: {
+            let mut h = histogram();
+            for g in results.iter().flat_map(|r| &r.gaps_ms) {
+                let _ = h.record((g * 1000.0).max(1.0) as u64);
+            }
+            (!h.is_empty()).then(|| percentiles(&h))
+        },
+        sessions_ended_early: results.iter().filter(|r| r.ended.is_some()).count() as u64,
+        ended_early_reason: results.iter().find_map(|r| r.ended.clone()),
         fps_timeline: timeline.lock().map(|t| t.clone()).unwrap_or_default(),
         histograms: hists,
     }
@@ -191,101 +217,76 @@ async fn session(
     progress: Arc<impl Fn(usize, f64) + Send + Sync>,
 ) -> SessionResult {
     let mut result = SessionResult::default();
-    let ws = match tokio_tungstenite::connect_async_with_config(&opts.url, None, true).await {
-        Ok((ws, _)) => ws,
+    let link = super::link::Link::open(super::link::LinkOptions {
+        url: opts.url.clone(),
+        token: opts.token.clone(),
+        hello: opts.hello.clone(),
+        reconnect: true,
+    })
+    .await;
+    let (link, mut events) = match link {
+        Ok((link, events, _)) => (link, events),
+        Err(ClientError::ClosedWith(1013, _)) => {
+            result.refused = true;
+            return result;
+        }
+        Err(ClientError::Refused(..)) => {
+            result.errors += 1;
+            return result;
+        }
         Err(e) => {
             result.connect_failed = true;
             result.connect_error = Some(e.to_string());
             return result;
         }
     };
-    let (mut sink, mut stream) = ws.split();
-    let mut hello = serde_json::to_value(&opts.hello).unwrap_or_default();
-    hello["type"] = "hello".into();
-    if sink
-        .send(Message::Text(hello.to_string().into()))
-        .await
-        .is_err()
-    {
-        result.connect_failed = true;
-        return result;
-    }
-    // The welcome, or a refusal.
-    loop {
-        match stream.next().await {
-            Some(Ok(Message::Text(t))) if t.as_str().contains("\"welcome\"") => break,
-            Some(Ok(Message::Text(_))) => {
-                result.errors += 1;
-                return result;
-            }
-            Some(Ok(Message::Close(frame))) => {
-                result.refused = frame.is_some_and(|f| u16::from(f.code) == 1013);
-                result.connect_failed = !result.refused;
-                return result;
-            }
-            Some(Ok(_)) => continue,
-            _ => {
-                result.connect_failed = true;
-                return result;
-            }
-        }
-    }
     let session_start = Instant::now();
-    let (out_tx, writer) = super::spawn_writer(sink);
     let sent_at: Arc<Mutex<BTreeMap<u64, f64>>> = Arc::new(Mutex::new(BTreeMap::new()));
     let reader = {
-        let (sent_at, acks, hists, timeline) = (
-            sent_at.clone(),
-            out_tx.clone(),
-            hists.clone(),
-            timeline.clone(),
-        );
+        let (sent_at, hists, timeline) = (sent_at.clone(), hists.clone(), timeline.clone());
         tokio::spawn(async move {
             let (mut frames, mut errors, mut answered) = (0u64, 0u64, 0u64);
-            while let Some(Ok(msg)) = stream.next().await {
-                match msg {
-                    Message::Binary(bytes) => {
-                        let now = session_start.elapsed().as_secs_f64() * 1e3;
-                        let Ok((h, _)) = decode_frame(&bytes) else {
-                            continue;
-                        };
-                        let _ = acks.send(Some(format!(r#"{{"type":"ack","frame":{}}}"#, h.frame)));
-                        frames += 1;
-                        answered += u64::from(h.seq.is_some());
-                        if let Ok(mut t) = timeline.lock() {
-                            let s = started.elapsed().as_secs() as usize;
-                            if let Some(slot) = t.get_mut(s) {
-                                *slot += 1;
-                            }
-                        }
-                        // Only a frame that answers a new sample measures gaze latency; one made
-                        // for the start or a settings change shows an older sample again.
-                        let answers_gaze = h.trigger == Trigger::Gaze;
-                        let latency = h
-                            .seq
-                            .filter(|_| answers_gaze)
-                            .and_then(|s| sent_at.lock().ok().and_then(|m| m.get(&s).copied()))
-                            .map(|t| now - t);
-                        if let Ok(mut hs) = hists.lock() {
-                            let mut rec = |k: &str, ms: f64| {
-                                if let Some(hh) = hs.get_mut(k) {
-                                    let _ = hh.record((ms * 1000.0).max(1.0) as u64);
-                                }
-                            };
-                            if let Some(l) = latency {
-                                rec("latency", l);
-                            }
-                            if answers_gaze {
-                                rec("queue", h.stages_ms.queue);
-                            }
-                            rec("render", h.stages_ms.render);
-                            rec("readback", h.stages_ms.readback);
-                            rec("encode", h.stages_ms.encode);
-                        }
+            while let Some(event) = events.recv().await {
+                let h = match event {
+                    LinkEvent::Frame { header, .. } => header,
+                    LinkEvent::Error(_) => {
+                        errors += 1;
+                        continue;
                     }
-                    Message::Text(t) if t.as_str().contains("\"error\"") => errors += 1,
-                    Message::Close(_) => break,
-                    _ => {}
+                    LinkEvent::Reconnected { .. } => continue,
+                };
+                let now = session_start.elapsed().as_secs_f64() * 1e3;
+                frames += 1;
+                answered += u64::from(h.seq.is_some());
+                if let Ok(mut t) = timeline.lock() {
+                    let s = started.elapsed().as_secs() as usize;
+                    if let Some(slot) = t.get_mut(s) {
+                        *slot += 1;
+                    }
+                }
+                // Only a frame that answers a new sample measures gaze latency; one made for
+                // the start or a settings change shows an older sample again.
+                let answers_gaze = h.trigger == Trigger::Gaze;
+                let latency = h
+                    .seq
+                    .filter(|_| answers_gaze)
+                    .and_then(|s| sent_at.lock().ok().and_then(|m| m.get(&s).copied()))
+                    .map(|t| now - t);
+                if let Ok(mut hs) = hists.lock() {
+                    let mut rec = |k: &str, ms: f64| {
+                        if let Some(hh) = hs.get_mut(k) {
+                            let _ = hh.record((ms * 1000.0).max(1.0) as u64);
+                        }
+                    };
+                    if let Some(l) = latency {
+                        rec("latency", l);
+                    }
+                    if answers_gaze {
+                        rec("queue", h.stages_ms.queue);
+                    }
+                    rec("render", h.stages_ms.render);
+                    rec("readback", h.stages_ms.readback);
+                    rec("encode", h.stages_ms.encode);
                 }
             }
             (frames, errors, answered)
@@ -344,12 +345,9 @@ async fn session(
         let pupil = pupil
             .map(|p| format!(r#","pupil_mm":{p}"#))
             .unwrap_or_default();
-        if out_tx
-            .send(Some(format!(
-                r#"{{"type":"gaze","seq":{seq},"t_ms":{t},"x":{x},"y":{y}{pupil}}}"#
-            )))
-            .is_err()
-        {
+        if !link.send(format!(
+            r#"{{"type":"gaze","seq":{seq},"t_ms":{t},"x":{x},"y":{y}{pupil}}}"#
+        )) {
             break;
         }
         result.gaze_sent += 1;
@@ -357,8 +355,10 @@ async fn session(
             progress(opts.sessions, started.elapsed().as_secs_f64());
         }
     }
-    let _ = out_tx.send(None);
-    let _ = writer.await;
+    let link = link.close().await;
+    result.reconnects = link.reconnects;
+    result.gaps_ms = link.gaps_ms;
+    result.ended = link.ended;
     if let Ok(Ok((frames, errors, answered))) =
         tokio::time::timeout(Duration::from_secs(10), reader).await
     {

@@ -8,17 +8,18 @@
 use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
 
-use futures_util::{SinkExt, StreamExt};
 use serde::Serialize;
-use tokio_tungstenite::tungstenite::Message;
 
+use super::link::{Link, LinkEvent, LinkOptions};
 use super::ClientError;
 use crate::gaze::{sendable, Sample};
-use crate::protocol::{decode_frame, Hello, ServerMessage};
+use crate::protocol::Hello;
 
 #[derive(Debug, Clone)]
 pub struct ReplayOptions {
     pub url: String,
+    /// Sent as `Authorization: Bearer …`.
+    pub token: Option<String>,
     pub hello: Hello,
     /// 2 plays twice as fast.
     pub speed: f64,
@@ -36,6 +37,8 @@ pub struct ReplayOptions {
 #[derive(Debug, Clone, Serialize)]
 pub struct FrameRecord {
     pub frame: u64,
+    /// Which session of the replay: 0, then one more per reconnect.
+    pub connection: u32,
     pub seq: Option<u64>,
     /// The answered sample's time in the recording, ms.
     pub sample_t_ms: Option<f64>,
@@ -69,6 +72,14 @@ pub struct ReplaySummary {
     pub server_samples: u64,
     /// Sent but never received by the server (expected: zero).
     pub samples_lost: u64,
+    /// Not delivered because no session was up (between a goodbye and the new session).
+    pub samples_dropped_reconnecting: u64,
+    /// New sessions opened after a goodbye or a dropped connection.
+    pub reconnects: u32,
+    /// Per reconnect: from the last frame of a session to the first of the next, ms.
+    pub reconnect_gaps_ms: Vec<f64>,
+    /// Why the replay stopped early, if it did.
+    pub ended_early: Option<String>,
     /// Received but answered by no frame: coalesced into a newer sample (expected: many).
     pub samples_coalesced: u64,
     pub latency_p50_ms: f64,
@@ -153,53 +164,33 @@ pub async fn replay(
         opts.duration_ms,
         opts.loops,
     );
-    let (ws, _) = tokio_tungstenite::connect_async_with_config(&opts.url, None, true)
-        .await
-        .map_err(|e| ClientError::Connect {
-            url: opts.url.clone(),
-            source: Box::new(e),
-        })?;
-    let (mut sink, mut stream) = ws.split();
-    let mut hello =
-        serde_json::to_value(&opts.hello).map_err(|e| ClientError::BadMessage(e.to_string()))?;
-    hello["type"] = "hello".into();
-    sink.send(Message::Text(hello.to_string().into()))
-        .await
-        .map_err(Box::new)?;
-    // Wait for welcome before streaming.
-    loop {
-        match stream.next().await {
-            Some(Ok(Message::Text(t))) => match serde_json::from_str::<ServerMessage>(t.as_str()) {
-                Ok(ServerMessage::Welcome(_)) => break,
-                Ok(ServerMessage::Error(e)) => return Err(ClientError::Refused(e.code, e.message)),
-                Err(e) => return Err(ClientError::BadMessage(e.to_string())),
-            },
-            Some(Ok(_)) => continue,
-            Some(Err(e)) => return Err(Box::new(e).into()),
-            None => return Err(ClientError::Closed),
-        }
-    }
-    let (out_tx, writer) = super::spawn_writer(sink);
+    let (link, mut events, _) = Link::open(LinkOptions {
+        url: opts.url.clone(),
+        token: opts.token.clone(),
+        hello: opts.hello.clone(),
+        reconnect: true,
+    })
+    .await?;
     let clock = Instant::now();
     // Send time (ms since start) of each seq; seq = position in the plan + 1.
     let sent_at: Arc<Mutex<Vec<Option<f64>>>> = Arc::new(Mutex::new(vec![None; plan.len() + 1]));
     let keep = opts.keep_images;
     let reader = {
         let sent_at = sent_at.clone();
-        let acks = out_tx.clone();
         let plan = plan.clone();
         let recorded: Vec<f64> = samples.iter().map(|s| s.t_ms).collect();
         tokio::spawn(async move {
             let mut frames = Vec::new();
-            while let Some(Ok(msg)) = stream.next().await {
-                let Message::Binary(bytes) = msg else {
+            while let Some(event) = events.recv().await {
+                let LinkEvent::Frame {
+                    header: h,
+                    image,
+                    connection,
+                } = event
+                else {
                     continue;
                 };
                 let received_ms = clock.elapsed().as_secs_f64() * 1e3;
-                let Ok((h, image)) = decode_frame(&bytes) else {
-                    continue;
-                };
-                let _ = acks.send(Some(format!(r#"{{"type":"ack","frame":{}}}"#, h.frame)));
                 let sent = h.seq.and_then(|s| {
                     sent_at
                         .lock()
@@ -208,6 +199,7 @@ pub async fn replay(
                 });
                 frames.push(FrameRecord {
                     frame: h.frame,
+                    connection,
                     seq: h.seq,
                     sample_t_ms: h
                         .seq
@@ -225,7 +217,7 @@ pub async fn replay(
                     sampled: h.sampled,
                     bytes: image.len(),
                     server_samples: h.samples,
-                    image: keep.then(|| image.to_vec()),
+                    image: keep.then_some(image),
                 });
             }
             frames
@@ -251,11 +243,9 @@ pub async fn replay(
             .pupil_mm
             .map(|p| format!(r#","pupil_mm":{p}"#))
             .unwrap_or_default();
-        let ok = out_tx
-            .send(Some(format!(
-                r#"{{"type":"gaze","seq":{seq},"t_ms":{t_ms},"x":{x},"y":{y}{pupil}}}"#
-            )))
-            .is_ok();
+        let ok = link.send(format!(
+            r#"{{"type":"gaze","seq":{seq},"t_ms":{t_ms},"x":{x},"y":{y}{pupil}}}"#
+        ));
         sent_count += 1;
         if sent_count % 200 == 0 {
             progress(sent_count + unsendable, total);
@@ -266,13 +256,19 @@ pub async fn replay(
     progress(total, total);
     // Let the last frames arrive, then close; the reader ends when the server closes too.
     tokio::time::sleep(Duration::from_millis(1500)).await;
-    let _ = out_tx.send(None);
-    let _ = writer.await;
+    let link = link.close().await;
     let frames = tokio::time::timeout(Duration::from_secs(10), reader)
         .await
         .map_err(|_| ClientError::Timeout(Duration::from_secs(10)))?
         .map_err(|e| ClientError::BadMessage(format!("reader task: {e}")))?;
-    let server_samples = frames.iter().map(|f| f.server_samples).max().unwrap_or(0);
+    // Each session counts its own samples: the total is the sum of each one's last count.
+    let mut per_connection = std::collections::BTreeMap::new();
+    for f in &frames {
+        let n = per_connection.entry(f.connection).or_insert(0u64);
+        *n = (*n).max(f.server_samples);
+    }
+    let server_samples: u64 = per_connection.values().sum();
+    let delivered = (sent_count as u64).saturating_sub(link.dropped);
     let answered = {
         let mut seqs: Vec<u64> = frames.iter().filter_map(|f| f.seq).collect();
         seqs.sort_unstable();
@@ -286,7 +282,11 @@ pub async fn replay(
         samples_unsendable: unsendable,
         frames: frames.len(),
         server_samples,
-        samples_lost: (sent_count as u64).saturating_sub(server_samples),
+        samples_lost: delivered.saturating_sub(server_samples),
+        samples_dropped_reconnecting: link.dropped,
+        reconnects: link.reconnects,
+        reconnect_gaps_ms: link.gaps_ms.clone(),
+        ended_early: link.ended.clone(),
         samples_coalesced: server_samples.saturating_sub(answered),
         latency_p50_ms: percentile(&mut latencies, 0.5),
         latency_p95_ms: percentile(&mut latencies, 0.95),
@@ -298,12 +298,13 @@ pub async fn replay(
 
 /// frames.csv: one row per frame received.
 pub fn frames_csv(frames: &[FrameRecord]) -> String {
-    let mut s = String::from("frame,seq,sample_t_ms,sent_ms,received_ms,latency_ms,gaze_x,gaze_y,queue_ms,render_ms,readback_ms,encode_ms,sampled,bytes,server_samples\n");
+    let mut s = String::from("frame,connection,seq,sample_t_ms,sent_ms,received_ms,latency_ms,gaze_x,gaze_y,queue_ms,render_ms,readback_ms,encode_ms,sampled,bytes,server_samples\n");
     let opt = |v: Option<f64>| v.map(|x| format!("{x:.3}")).unwrap_or_default();
     for f in frames {
         s.push_str(&format!(
-            "{},{},{},{},{:.3},{},{:.5},{:.5},{:.3},{:.3},{:.3},{:.3},{:.4},{},{}\n",
+            "{},{},{},{},{},{:.3},{},{:.5},{:.5},{:.3},{:.3},{:.3},{:.3},{:.4},{},{}\n",
             f.frame,
+            f.connection,
             f.seq.map(|s| s.to_string()).unwrap_or_default(),
             opt(f.sample_t_ms),
             opt(f.sent_ms),

@@ -172,6 +172,20 @@ pub struct ErrorMessage {
 pub enum ServerMessage {
     Welcome(Welcome),
     Error(ErrorMessage),
+    Goodbye(Goodbye),
+}
+
+/// The server is going away (a rolling update, a scale-down): the session keeps its frames
+/// until the server closes it with 1001, and the client should open a new session to the same
+/// URL after `retry_ms` (the balancer sends it to another instance).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Goodbye {
+    /// Why: `draining` is the only reason so far.
+    pub reason: String,
+    /// When to reconnect, ms from now (spread per session so a fleet is not hit all at once).
+    pub retry_ms: u64,
+    /// When the server closes this session if the client has not left, ms from now.
+    pub closes_in_ms: u64,
 }
 
 impl ServerMessage {

@@ -17,7 +17,7 @@ pub use frame::{
 };
 pub use limits::{Limits, SceneFileLimits};
 pub use messages::{
-    Ack, CameraMove, CameraPose, Codec, Display, ErrorMessage, Gaze, Hello, SceneInfo,
+    Ack, CameraMove, CameraPose, Codec, Display, ErrorMessage, Gaze, Goodbye, Hello, SceneInfo,
     ServerMessage, Welcome, PROTOCOL_VERSION,
 };
 pub use parse::{parse_client_message, ClientMessage};

@@ -1,10 +1,10 @@
 use std::sync::Arc;
 
 use axum::extract::ws::{CloseFrame, Message, WebSocketUpgrade};
-use axum::extract::State;
-use axum::http::{header, StatusCode, Uri};
+use axum::extract::{Query, State};
+use axum::http::{header, HeaderMap, StatusCode, Uri};
 use axum::response::{IntoResponse, Response};
-use axum::routing::get;
+use axum::routing::{get, post};
 use axum::Router;
 
 use super::{assets, session, ServerState, HARD_MESSAGE_LIMIT};
@@ -15,15 +15,19 @@ pub fn router(state: Arc<ServerState>) -> Router {
         .route("/healthz", get(|| async { "ok\n" }))
         .route("/readyz", get(readyz))
         .route("/metrics", get(metrics_text))
+        .route("/admin/drain", post(admin_drain))
         .route("/recordings/{id}", get(super::recordings::download))
         .fallback(get(static_file))
         .with_state(state)
 }
 
-/// Ready while a session slot is free: load balancers send new viewers elsewhere otherwise.
-/// Radiosity solves still refining are listed but do not make the server unready: sessions
-/// start on the preview and see it improve.
+/// Ready while a session slot is free and no drain has begun: load balancers send new viewers
+/// elsewhere otherwise. Radiosity solves still refining are listed but do not make the server
+/// unready: sessions start on the preview and see it improve.
 async fn readyz(State(state): State<Arc<ServerState>>) -> Response {
+    if state.draining.is_cancelled() {
+        return (StatusCode::SERVICE_UNAVAILABLE, "draining\n").into_response();
+    }
     if state.slots.available_permits() > 0 {
         let mut body = String::from("ready\n");
         for solve in state.render.solves() {
@@ -47,7 +51,27 @@ async fn readyz(State(state): State<Arc<ServerState>>) -> Response {
     }
 }
 
-async fn metrics_text() -> Response {
+/// Starts a drain, as SIGTERM does; answers at once (the drain runs on).
+async fn admin_drain(State(state): State<Arc<ServerState>>, headers: HeaderMap) -> Response {
+    if let Err(refusal) = state.access.admit_admin(&headers) {
+        return refusal.into_response();
+    }
+    let already = state.drain_request.is_cancelled();
+    state.drain_request.cancel();
+    let grace = state.drain_grace.as_secs_f64();
+    let body = if already {
+        "already draining\n".to_string()
+    } else {
+        tracing::info!("drain asked for over /admin/drain");
+        format!("draining: sessions have {grace} s to move, then the server exits\n")
+    };
+    (StatusCode::ACCEPTED, body).into_response()
+}
+
+async fn metrics_text(State(state): State<Arc<ServerState>>, headers: HeaderMap) -> Response {
+    if let Err(refusal) = state.access.admit_metrics(&headers) {
+        return refusal.into_response();
+    }
     match super::metrics::handle() {
         Some(h) => (
             [(header::CONTENT_TYPE, "text/plain; version=0.0.4")],
@@ -62,7 +86,32 @@ async fn metrics_text() -> Response {
     }
 }
 
-async fn websocket(State(state): State<Arc<ServerState>>, ws: WebSocketUpgrade) -> Response {
+#[derive(serde::Deserialize)]
+struct WsQuery {
+    token: Option<String>,
+}
+
+async fn websocket(
+    State(state): State<Arc<ServerState>>,
+    headers: HeaderMap,
+    Query(query): Query<WsQuery>,
+    ws: WebSocketUpgrade,
+) -> Response {
+    // Before the upgrade: a refused client never holds a slot or a socket task.
+    if let Err(refusal) = state.access.admit_session(&headers, query.token.as_deref()) {
+        ::metrics::counter!("fovea_sessions_unauthorised_total").increment(1);
+        return refusal.into_response();
+    }
+    if state.draining.is_cancelled() {
+        // A balancer that retries on 503 (nginx's proxy_next_upstream http_503) sends the
+        // client to another instance within the same request.
+        return (
+            StatusCode::SERVICE_UNAVAILABLE,
+            [(header::RETRY_AFTER, "1")],
+            "draining: this instance takes no new sessions; reconnect (another instance will)\n",
+        )
+            .into_response();
+    }
     let permit = state.slots.clone().try_acquire_owned().ok();
     let token = state.sessions.token();
     let ws = ws

@@ -2,9 +2,11 @@
 //! socket), `GET /healthz`. `run` takes its listener and shutdown signal as arguments so tests
 //! can bind 127.0.0.1:0 and stop it when they are done.
 
+pub mod access;
 mod app;
 mod assets;
 mod connection;
+mod drain;
 mod frame_maker;
 pub mod metrics;
 mod pacing;
@@ -30,9 +32,6 @@ pub use app::router;
 /// polite `too_large` error, above this the transport closes the socket (code 1009).
 pub const HARD_MESSAGE_LIMIT: usize = 64 * 1024;
 
-/// How long sessions get to say goodbye (close frame 1001) after shutdown starts.
-const DRAIN: Duration = Duration::from_secs(2);
-
 /// State shared by every request handler and session.
 pub struct ServerState {
     /// The only way to the GPU: a queue into the render thread.
@@ -45,10 +44,19 @@ pub struct ServerState {
     pub cameras: std::collections::HashMap<String, crate::scene::Camera>,
     /// Session ids, unique for the server's life (logs and `welcome`).
     pub next_session: AtomicU64,
-    /// Cancelled once on shutdown; every session watches it and closes its socket.
-    pub shutdown: CancellationToken,
-    /// Counts live sessions so shutdown can wait for their close frames.
+    /// Cancelled to ask for a drain (SIGTERM, `POST /admin/drain`, a test).
+    pub drain_request: CancellationToken,
+    /// Cancelled when the drain begins: `/readyz` answers 503, no session is admitted, every
+    /// session says goodbye to its client.
+    pub draining: CancellationToken,
+    /// Cancelled when the drain's grace period ends: every session closes with 1001.
+    pub closing: CancellationToken,
+    /// How long sessions get to leave by themselves once the drain begins.
+    pub drain_grace: Duration,
+    /// Counts live sessions so the drain can wait for them.
     pub sessions: TaskTracker,
+    /// Who may open sessions, read metrics and drain.
+    pub access: access::Access,
     /// Where sessions' received gaze samples are recorded, if anywhere (opt-in).
     pub record_dir: Option<std::path::PathBuf>,
     /// Each recording session's file, fetchable by its own client only.
@@ -77,6 +85,9 @@ pub struct ServerOptions {
     pub hello_timeout: Duration,
     /// The scenes clients may name (the renderer must have the same catalog).
     pub catalog: crate::scene::Catalog,
+    /// Grace period of a drain: sessions are told goodbye at once and closed (1001) after it.
+    pub drain: Duration,
+    pub access: access::Access,
 }
 
 impl Default for ServerOptions {
@@ -87,11 +98,13 @@ impl Default for ServerOptions {
             stall_timeout: Duration::from_secs(10),
             hello_timeout: Duration::from_secs(5),
             catalog: crate::scene::Catalog::builtin(),
+            drain: Duration::from_secs(10),
+            access: access::Access::default(),
         }
     }
 }
 
-/// Serves until `shutdown` is cancelled, then closes every session with 1001 and returns.
+/// Serves until `shutdown` is cancelled, then drains (see `drain`) and returns.
 pub async fn run(
     listener: TcpListener,
     render: RenderHandle,
@@ -139,8 +152,12 @@ pub async fn run_with(
         scenes,
         cameras,
         next_session: AtomicU64::new(1),
-        shutdown: shutdown.clone(),
+        drain_request: shutdown.clone(),
+        draining: CancellationToken::new(),
+        closing: CancellationToken::new(),
+        drain_grace: options.drain,
         sessions: TaskTracker::new(),
+        access: options.access,
         record_dir: options.record_dir,
         recordings: Default::default(),
         slots: Arc::new(tokio::sync::Semaphore::new(options.max_sessions.max(1))),
@@ -151,7 +168,7 @@ pub async fn run_with(
     // The exporter's histograms keep growing buckets until upkeep drains them; it runs on a
     // scrape, so a server nobody scrapes would creep (~90 bytes a frame). Run it on a timer.
     if let Some(handle) = metrics::handle() {
-        let stop = shutdown.clone();
+        let stop = state.closing.clone();
         tokio::spawn(async move {
             let mut tick = tokio::time::interval(Duration::from_secs(5));
             loop {
@@ -170,15 +187,34 @@ pub async fn run_with(
             tracing::warn!("cannot set TCP_NODELAY: {e}");
         }
     });
-    axum::serve(listener, app)
-        .with_graceful_shutdown(shutdown.cancelled_owned())
-        .await?;
-    state.sessions.close();
-    if tokio::time::timeout(DRAIN, state.sessions.wait())
-        .await
-        .is_err()
-    {
-        tracing::warn!("some sessions did not close within {DRAIN:?}");
+    let stopped = CancellationToken::new();
+    tokio::spawn(drain::run(state.clone(), stopped.clone()));
+    let serve =
+        axum::serve(listener, app).with_graceful_shutdown(stopped.clone().cancelled_owned());
+    // Graceful shutdown waits for every open HTTP connection; an idle keep-alive one (a proxy's
+    // pool) must not hold the exit past the drain.
+    tokio::select! {
+        served = serve => served?,
+        _ = async {
+            stopped.cancelled().await;
+            tokio::time::sleep(drain::CLOSE_WAIT).await;
+        } => tracing::debug!("idle connections left open at exit"),
     }
     Ok(())
+}
+
+/// Refuses to listen beyond this machine with nobody asked for a token: anyone who can reach
+/// the port would get sessions on the GPU (`--insecure-no-auth` says that is intended).
+pub fn check_exposure(
+    addr: std::net::SocketAddr,
+    access: &access::Access,
+    insecure_no_auth: bool,
+) -> Result<(), String> {
+    if addr.ip().is_loopback() || access.token.is_some() || insecure_no_auth {
+        return Ok(());
+    }
+    Err(format!(
+        "refusing to serve on {addr} without a token: anyone who reaches it could open sessions. \
+         Set --token (or FOVEA_TOKEN), listen on 127.0.0.1, or pass --insecure-no-auth"
+    ))
 }

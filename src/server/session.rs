@@ -55,6 +55,7 @@ pub async fn run(socket: WebSocket, state: Arc<ServerState>, id: u64) {
     let mut making: Option<Making> = None;
     let mut sent = 0u64;
     let hello_by = tokio::time::Instant::now() + state.hello_timeout;
+    let mut told_goodbye = false;
     let close = loop {
         if making.is_none() {
             if let Some(job) = s.next_job() {
@@ -67,7 +68,12 @@ pub async fn run(socket: WebSocket, state: Arc<ServerState>, id: u64) {
             .and_then(|p| p.stall_deadline(making.is_some()));
         let stall_at = tokio::time::Instant::from_std(stall.unwrap_or(Instant::now() + NEVER));
         let replies = tokio::select! {
-            _ = state.shutdown.cancelled() => break Some(close_frame(1001, "server shutting down".into())),
+            _ = state.closing.cancelled() => break Some(close_frame(1001, "server shutting down".into())),
+            _ = state.draining.cancelled(), if !told_goodbye => {
+                told_goodbye = true;
+                let bye = super::drain::goodbye(id, state.drain_grace);
+                vec![Outgoing::Text(ServerMessage::Goodbye(bye))]
+            }
             _ = tokio::time::sleep_until(stall_at), if stall.is_some() => {
                 ::metrics::counter!("fovea_sessions_stalled_total").increment(1);
                 tracing::info!(session = id, "disconnecting a stalled client");
