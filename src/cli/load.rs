@@ -139,6 +139,20 @@ pub fn load(a: LoadArgs) -> Result<()> {
             report.refused,
             report.connection_failures
         );
+        if report.reconnects > 0 || report.sessions_ended_early > 0 {
+            let gap = report.reconnect_gap_ms.map_or(String::new(), |g| {
+                format!(", gap between frames p50 {:.0} max {:.0} ms", g.p50, g.max)
+            });
+            println!(
+                "  {} reconnects (a server drained or a connection dropped){gap}; {} sessions ended early{}",
+                report.reconnects,
+                report.sessions_ended_early,
+                report
+                    .ended_early_reason
+                    .as_ref()
+                    .map_or(String::new(), |r| format!(" ({r})"))
+            );
+        }
         reports.push(report);
     }
     let capacity = reports
