@@ -3,7 +3,9 @@
 #   scripts/setup.sh          what `fovea serve` needs: a C toolchain, the Vulkan loader and a
 #                             Vulkan driver, and a Rust toolchain at least as new as Cargo.toml's
 #                             rust-version (rustup, into ~/.cargo, when the system's is older)
-#   scripts/setup.sh --test   also what the tests need: a Chromium for the browser tests
+#   scripts/setup.sh --test   also what the tests need: a Chromium for the browser tests, nginx
+#                             for the fleet test, and (in a Python virtual environment)
+#                             kubernetes-validate and checkov for the deployment checks
 # Prints `export PATH=…` advice when it installed Rust; the other scripts source ~/.cargo/env.
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -37,6 +39,14 @@ if [[ $want_test -eq 1 ]]; then
   done
   # Debian packages Chromium as a .deb; Ubuntu 24.04 only as a snap (see below).
   [[ -z "$browser" && "$ID" == "debian" ]] && pkgs+=(chromium)
+  # The fleet test's balancer (run by the test in its own prefix, not as the system service).
+  command -v nginx >/dev/null || [[ -x /usr/sbin/nginx ]] || pkgs+=(nginx)
+  # A virtual environment for the deployment checks' tools (Debian splits venv out of python3).
+  if [[ ! -x "${FOVEA_DEPLOY_TOOLS:-$HOME/.cache/fovea/deploy-tools}/bin/checkov" ]]; then
+    probe=$(mktemp -d)
+    python3 -m venv "$probe/v" >/dev/null 2>&1 || pkgs+=(python3 python3-venv)
+    rm -rf "$probe"
+  fi
 fi
 
 if [[ ${#pkgs[@]} -gt 0 ]]; then
@@ -56,6 +66,17 @@ if [[ $want_test -eq 1 && -z "$browser" && "$ID" != "debian" ]]; then
   "$venv/bin/playwright" install chromium-headless-shell >/dev/null
   shell=$(compgen -G "$HOME/.cache/ms-playwright/chromium_headless_shell-*/chrome-*/chrome-headless-shell" | head -n1)
   echo "setup: browser tests use $shell (export CHROMIUM=$shell)"
+fi
+
+if [[ $want_test -eq 1 ]]; then
+  # The deployment checks' tools, pinned, in their own virtual environment.
+  tools=${FOVEA_DEPLOY_TOOLS:-$HOME/.cache/fovea/deploy-tools}
+  if [[ ! -x "$tools/bin/checkov" || ! -x "$tools/bin/kubernetes-validate" ]]; then
+    echo "setup: installing kubernetes-validate and checkov into $tools"
+    python3 -m venv "$tools"
+    "$tools/bin/pip" install -q --disable-pip-version-check \
+      kubernetes-validate==1.37.0 checkov==3.3.30 jsonpatch==1.48 PyYAML==6.0.4
+  fi
 fi
 
 # Rust: the toolchain must be at least Cargo.toml's rust-version (the newest minimum in the

@@ -198,7 +198,7 @@ fn main() -> Result<()> {
             drain_s,
             access,
         } => {
-            let (access, insecure) = access.resolve();
+            let (access, insecure) = access.resolve()?;
             fovea::server::check_exposure(addr, &access, insecure).map_err(anyhow::Error::msg)?;
             serve(
                 addr,
