@@ -158,6 +158,9 @@ async fn the_page_reconnects_after_the_server_restarts() {
         status.success(),
         "fovea serve exits cleanly on SIGTERM: {status}"
     );
+    // SIGTERM drains: the page was told goodbye and left by itself, so the server did not
+    // have to wait out its grace period.
+    assert_eq!(eval(&page, "window.fovea.moves").await, Value::from(1));
     wait_for(
         &page,
         "/reconnecting in \\d+ s/.test(document.getElementById('banner').textContent)",
@@ -172,6 +175,15 @@ async fn the_page_reconnects_after_the_server_restarts() {
         Value::Bool(true)
     );
     screenshot(&page, "reconnected").await;
+    drop(page);
+    f.finish();
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn the_page_passes_its_token_on() {
+    let f = Fixture::start(&["--token", "page-token"]).await;
+    let url = format!("{}/?token=page-token", f.server.url);
+    let page = harness::open(&f.browser, &url).await;
     drop(page);
     f.finish();
 }
