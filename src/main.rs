@@ -8,10 +8,9 @@ use std::path::PathBuf;
 use anyhow::{bail, Context, Result};
 use clap::{Parser, Subcommand};
 use glam::Vec3;
-use tokio_util::sync::CancellationToken;
 
 use fovea::protocol::Codec;
-use fovea::render::{FrameRequest, RenderThread, Renderer};
+use fovea::render::{FrameRequest, Renderer};
 
 use cli::bench::{bench, BenchArgs};
 use cli::gaze::{gaze, replay, GazeArgs, ReplayArgs};
@@ -200,7 +199,7 @@ fn main() -> Result<()> {
         } => {
             let (access, insecure) = access.resolve()?;
             fovea::server::check_exposure(addr, &access, insecure).map_err(anyhow::Error::msg)?;
-            serve(
+            cli::serve::serve(
                 addr,
                 fovea::server::ServerOptions {
                     record_dir,
@@ -297,71 +296,6 @@ fn plot(file: &std::path::Path) -> Result<()> {
         bail!("{}: neither a bench.json nor a load.json", file.display());
     }
     Ok(())
-}
-
-fn serve(addr: SocketAddr, options: fovea::server::ServerOptions) -> Result<()> {
-    let mut renderer = Renderer::new().context("opening the GPU")?;
-    renderer.set_catalog(options.catalog.clone());
-    renderer
-        .load_scene(fovea::scene::DEFAULT_SCENE)
-        .context("loading the default scene")?;
-    // Scenes from --scenes folders go onto the GPU now (built-in ones are small), so the first
-    // viewer of a large model does not hold the render thread, and every session, while it loads.
-    for entry in options
-        .catalog
-        .entries()
-        .iter()
-        .filter(|e| e.file.is_some())
-    {
-        if let Err(e) = renderer.load_scene(&entry.name) {
-            tracing::error!("scene {} does not load onto the GPU: {e}", entry.name);
-        }
-    }
-    let (render, render_thread) =
-        RenderThread::spawn(renderer).context("starting the render thread")?;
-    let runtime = tokio::runtime::Runtime::new().context("starting the async runtime")?;
-    runtime.block_on(async move {
-        let listener = tokio::net::TcpListener::bind(addr)
-            .await
-            .with_context(|| format!("binding {addr}"))?;
-        let local = listener.local_addr()?;
-        println!("fovea listening on http://{local}/");
-        let shutdown = CancellationToken::new();
-        tokio::spawn(stop_on_signal(shutdown.clone()));
-        fovea::server::run_with(listener, render, shutdown, options)
-            .await
-            .context("serving")?;
-        tracing::info!("server stopped");
-        anyhow::Ok(())
-    })?;
-    // Every RenderHandle is gone with the server, so the render thread is finishing too.
-    let _ = render_thread.join();
-    Ok(())
-}
-
-async fn stop_on_signal(shutdown: CancellationToken) {
-    let ctrl_c = tokio::signal::ctrl_c();
-    #[cfg(unix)]
-    {
-        let mut term =
-            match tokio::signal::unix::signal(tokio::signal::unix::SignalKind::terminate()) {
-                Ok(t) => t,
-                Err(e) => {
-                    tracing::warn!("cannot watch SIGTERM: {e}");
-                    let _ = ctrl_c.await;
-                    shutdown.cancel();
-                    return;
-                }
-            };
-        tokio::select! {
-            _ = ctrl_c => {}
-            _ = term.recv() => {}
-        }
-    }
-    #[cfg(not(unix))]
-    let _ = ctrl_c.await;
-    tracing::info!("shutting down: closing sessions");
-    shutdown.cancel();
 }
 
 fn render(

@@ -133,3 +133,52 @@ async fn a_recorded_session_replays_to_the_same_frames() {
     shutdown.stop().await;
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// A replay whose server drains moves to the instance that takes its place (the same URL, as
+/// behind a balancer), carries on, and says what the move cost.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn a_replay_follows_a_goodbye_to_the_next_instance() {
+    let drainable = || fovea::server::ServerOptions {
+        drain: Duration::from_secs(5),
+        ..Default::default()
+    };
+    let (addr, first) = common::start(drainable()).await;
+    let eye = fovea::gaze::synthetic::generate(
+        9,
+        &fovea::viewing::Viewing {
+            width: 96,
+            height: 64,
+            width_cm: 53.0,
+            distance_cm: 60.0,
+        },
+        6.0,
+        250.0,
+    );
+    let url = format!("ws://{addr}/ws");
+    let opts = options(&url);
+    let run = tokio::spawn(async move { replay(&eye, &opts, |_, _| {}).await });
+    tokio::time::sleep(Duration::from_millis(1500)).await;
+    // SIGTERM's path: the replay is told goodbye, leaves, and the instance exits.
+    let began = std::time::Instant::now();
+    first.stop().await;
+    assert!(
+        began.elapsed() < Duration::from_secs(5),
+        "the session left before the grace ended"
+    );
+    let (_, second) = common::start_on(addr, drainable()).await;
+    let (frames, summary) = run.await.unwrap().expect("the replay carries on");
+    assert_eq!(summary.reconnects, 1, "{summary:?}");
+    assert!(summary.ended_early.is_none(), "{summary:?}");
+    assert_eq!(summary.reconnect_gaps_ms.len(), 1, "{summary:?}");
+    let on_second = frames.iter().filter(|f| f.connection == 1).count();
+    assert!(on_second > 20, "frames from the new instance: {on_second}");
+    assert!(frames.iter().any(|f| f.connection == 0));
+    // Samples sent while no session was up are counted apart from losses; what the first
+    // instance received after its last frame cannot be seen from here, so a few may show as lost.
+    assert!(summary.samples_dropped_reconnecting > 0, "{summary:?}");
+    assert!(
+        (summary.samples_lost as f64) < 0.05 * summary.samples_sent as f64,
+        "{summary:?}"
+    );
+    second.stop().await;
+}

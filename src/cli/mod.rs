@@ -7,3 +7,4 @@ pub mod load;
 pub mod parse;
 pub mod radiosity;
 pub mod scenes;
+pub mod serve;

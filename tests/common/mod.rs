@@ -31,10 +31,15 @@ impl Running {
 }
 
 pub async fn start(options: ServerOptions) -> (SocketAddr, Running) {
+    start_on("127.0.0.1:0".parse().unwrap(), options).await
+}
+
+/// A server on `addr`: a given port lets a test put a second instance where a drained one was.
+pub async fn start_on(addr: SocketAddr, options: ServerOptions) -> (SocketAddr, Running) {
     let mut renderer = Renderer::new().unwrap_or_else(|e| panic!("GPU tests need an adapter: {e}"));
     renderer.set_catalog(options.catalog.clone());
     let (render, thread) = RenderThread::spawn(renderer).unwrap();
-    let listener = tokio::net::TcpListener::bind("127.0.0.1:0").await.unwrap();
+    let listener = tokio::net::TcpListener::bind(addr).await.unwrap();
     let addr = listener.local_addr().unwrap();
     let shutdown = CancellationToken::new();
     let task = tokio::spawn(fovea::server::run_with(
