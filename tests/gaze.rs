@@ -18,6 +18,16 @@ async fn server(record: Option<std::path::PathBuf>) -> (String, common::Running)
     (format!("ws://{addr}/ws"), running)
 }
 
+/// The frame the replays ask for, as a screen for the synthetic eye.
+fn small_screen() -> fovea::viewing::Viewing {
+    fovea::viewing::Viewing {
+        width: 96,
+        height: 64,
+        width_cm: 53.0,
+        distance_cm: 60.0,
+    }
+}
+
 fn options(url: &str) -> ReplayOptions {
     ReplayOptions {
         url: url.to_string(),
@@ -80,17 +90,7 @@ async fn a_recorded_session_replays_to_the_same_frames() {
     let dir = std::env::temp_dir().join(format!("fovea-record-{}", std::process::id()));
     let _ = std::fs::remove_dir_all(&dir);
     let (url, shutdown) = server(Some(dir.clone())).await;
-    let synthetic = fovea::gaze::synthetic::generate(
-        5,
-        &fovea::viewing::Viewing {
-            width: 96,
-            height: 64,
-            width_cm: 53.0,
-            distance_cm: 60.0,
-        },
-        60.0,
-        1000.0,
-    );
+    let synthetic = fovea::gaze::synthetic::generate(5, &small_screen(), 60.0, 1000.0);
     let slow = ReplayOptions {
         speed: 0.5,
         ..options(&url)
@@ -143,17 +143,7 @@ async fn a_replay_follows_a_goodbye_to_the_next_instance() {
         ..Default::default()
     };
     let (addr, first) = common::start(drainable()).await;
-    let eye = fovea::gaze::synthetic::generate(
-        9,
-        &fovea::viewing::Viewing {
-            width: 96,
-            height: 64,
-            width_cm: 53.0,
-            distance_cm: 60.0,
-        },
-        6.0,
-        250.0,
-    );
+    let eye = fovea::gaze::synthetic::generate(9, &small_screen(), 250.0, 6000.0);
     let url = format!("ws://{addr}/ws");
     let opts = options(&url);
     let run = tokio::spawn(async move { replay(&eye, &opts, |_, _| {}).await });
@@ -167,6 +157,7 @@ async fn a_replay_follows_a_goodbye_to_the_next_instance() {
     );
     let (_, second) = common::start_on(addr, drainable()).await;
     let (frames, summary) = run.await.unwrap().expect("the replay carries on");
+    println!("{summary:?}");
     assert_eq!(summary.reconnects, 1, "{summary:?}");
     assert!(summary.ended_early.is_none(), "{summary:?}");
     assert_eq!(summary.reconnect_gaps_ms.len(), 1, "{summary:?}");

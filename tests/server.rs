@@ -27,7 +27,17 @@ impl Server {
         let listener = tokio::net::TcpListener::bind("127.0.0.1:0").await.unwrap();
         let addr = listener.local_addr().unwrap();
         let shutdown = CancellationToken::new();
-        let task = tokio::spawn(fovea::server::run(listener, render, shutdown.clone()));
+        // A short drain: a test client that ignores the goodbye is closed (1001) after 2 s.
+        let options = fovea::server::ServerOptions {
+            drain: Duration::from_secs(2),
+            ..Default::default()
+        };
+        let task = tokio::spawn(fovea::server::run_with(
+            listener,
+            render,
+            shutdown.clone(),
+            options,
+        ));
         Server {
             addr,
             shutdown,
@@ -394,13 +404,16 @@ async fn page_health_and_shutdown() {
     c.hello(&hello(32, 32)).await.unwrap();
     let _ = next_frame(&mut c).await;
     server.shutdown.cancel();
+    let mut told = false;
     let close = loop {
         match c.next_event(WAIT).await {
             Ok(Event::Closed(close)) => break close,
+            Ok(Event::Goodbye(g)) => told = g.reason == "draining",
             Ok(_) => continue,
             Err(e) => panic!("expected a close frame, got {e}"),
         }
     };
+    assert!(told, "a goodbye came before the close");
     assert_eq!(
         close.map(|(code, _)| code),
         Some(1001),

@@ -65,39 +65,33 @@ impl Access {
         query_token: Option<&str>,
     ) -> Result<(), Refusal> {
         self.check_origin(headers)?;
-        match &self.token {
-            None => Ok(()),
-            Some(t) if offered(headers, query_token).is_some_and(|o| t.matches(o)) => Ok(()),
-            Some(_) => Err((
-                StatusCode::UNAUTHORIZED,
-                "this server needs a token: Authorization: Bearer <token>, or ?token=<token>\n",
-            )),
-        }
+        require(
+            &self.token,
+            offered(headers, query_token),
+            "this server needs a token: Authorization: Bearer <token>, or ?token=<token>\n",
+        )
     }
 
     pub fn admit_metrics(&self, headers: &HeaderMap) -> Result<(), Refusal> {
-        match &self.metrics_token {
-            None => Ok(()),
-            Some(t) if offered(headers, None).is_some_and(|o| t.matches(o)) => Ok(()),
-            Some(_) => Err((
-                StatusCode::UNAUTHORIZED,
-                "metrics need the metrics token: Authorization: Bearer <token>\n",
-            )),
-        }
+        require(
+            &self.metrics_token,
+            offered(headers, None),
+            "metrics need the metrics token: Authorization: Bearer <token>\n",
+        )
     }
 
     pub fn admit_admin(&self, headers: &HeaderMap) -> Result<(), Refusal> {
-        match &self.admin_token {
-            None => Err((
+        if self.admin_token.is_none() {
+            return Err((
                 StatusCode::FORBIDDEN,
                 "admin endpoints are off: start the server with --admin-token\n",
-            )),
-            Some(t) if offered(headers, None).is_some_and(|o| t.matches(o)) => Ok(()),
-            Some(_) => Err((
-                StatusCode::UNAUTHORIZED,
-                "admin endpoints need the admin token: Authorization: Bearer <token>\n",
-            )),
+            ));
         }
+        require(
+            &self.admin_token,
+            offered(headers, None),
+            "admin endpoints need the admin token: Authorization: Bearer <token>\n",
+        )
     }
 
     /// No `Origin`: not a browser (browsers always send one on a WebSocket handshake), and a
@@ -130,6 +124,19 @@ impl Access {
                 "this page's origin may not open sessions here (the server allows its own page and --allow-origin)\n",
             ))
         }
+    }
+}
+
+/// No secret set: open. Otherwise the offered token must match (401 with `why` if not).
+fn require(
+    secret: &Option<Secret>,
+    offered: Option<&str>,
+    why: &'static str,
+) -> Result<(), Refusal> {
+    match secret {
+        None => Ok(()),
+        Some(t) if offered.is_some_and(|o| t.matches(o)) => Ok(()),
+        Some(_) => Err((StatusCode::UNAUTHORIZED, why)),
     }
 }
 
