@@ -62,8 +62,10 @@ export function connect() {
   resetSession();
   state.waitingSince = performance.now(); // the first frame is awaited from here
   const [width, height] = controls.size.value.split('x').map(Number);
-  canvas.width = width;
-  canvas.height = height;
+  // Assigning a canvas's size clears it: only when it changes, so the last frame stays up
+  // while the page moves to another instance or reconnects.
+  if (canvas.width !== width) canvas.width = width;
+  if (canvas.height !== height) canvas.height = height;
   const proto = location.protocol === 'https:' ? 'wss' : 'ws';
   // A server started with --token wants it: the page's own ?token= is passed on.
   const token = new URLSearchParams(location.search).get('token');

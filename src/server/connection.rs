@@ -28,6 +28,8 @@ pub enum Incoming {
     Message(ClientMessage),
     /// A text message that did not parse or validate: the client gets this error.
     Invalid(ProtocolError),
+    /// The client broke the WebSocket rules: the session closes with this code and reason.
+    Violation(u16, String),
 }
 
 /// What the session hands the writer.
@@ -110,6 +112,9 @@ async fn read(
         let parsed = match msg {
             Err(e) => {
                 tracing::debug!(session = id, "socket error: {e}");
+                if let Some((code, reason)) = violation(&e) {
+                    let _ = incoming.send(Incoming::Violation(code, reason)).await;
+                }
                 break;
             }
             Ok(Message::Close(_)) => break,
@@ -130,6 +135,29 @@ async fn read(
             break; // the session has ended
         }
     }
+}
+
+/// The close code for a read error that is the client's fault (RFC 6455 §7.4.1), with a
+/// reason; `None` for a connection that merely failed (reset, closed without a frame).
+/// The transport's errors reach us boxed in `axum::Error`, so they are told apart by the
+/// transport's own wording; `tests/close_codes.rs` holds each to its code.
+fn violation(e: &axum::Error) -> Option<(u16, String)> {
+    let text = e.to_string();
+    let code = if text.contains("Space limit exceeded") || text.contains("too long") {
+        return Some((
+            1009,
+            format!("message over {} bytes", super::HARD_MESSAGE_LIMIT),
+        ));
+    } else if text.contains("UTF-8") {
+        1007
+    } else if text.contains("protocol error") {
+        1002
+    } else {
+        return None;
+    };
+    // Close reasons are at most 123 bytes.
+    let reason: String = text.chars().take(100).collect();
+    Some((code, reason))
 }
 
 async fn write(

@@ -89,6 +89,10 @@ pub async fn run(socket: WebSocket, state: Arc<ServerState>, id: u64) {
             incoming = conn.incoming.recv() => match incoming {
                 None => break None,
                 Some(Incoming::Invalid(e)) => vec![Outgoing::Text(e.into())],
+                Some(Incoming::Violation(code, reason)) => {
+                    ::metrics::counter!("fovea_protocol_violations_total").increment(1);
+                    break Some(close_frame(code, reason));
+                }
                 Some(Incoming::Message(m)) => s.on_message(m).map(Outgoing::Text).into_iter().collect(),
             },
             Some(times) = conn.sent.recv() => {
