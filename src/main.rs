@@ -49,7 +49,7 @@ enum Command {
         /// Address to listen on. Port 0 picks a free port.
         #[arg(long, default_value = "127.0.0.1:8080")]
         addr: SocketAddr,
-        /// Record every session's received gaze samples to DIR/session-<id>.csv (generic CSV,
+        /// Record every session's received gaze samples to DIR/run-…/session-<id>.csv (one folder per run; generic CSV,
         /// replayable with `fovea replay`).
         #[arg(long)]
         record_dir: Option<PathBuf>,

@@ -255,7 +255,8 @@ async fn a_drain_says_goodbye_admits_nobody_and_ends_within_its_grace() {
         began.elapsed()
     );
     // Both recordings are whole: renamed into place, every received sample a complete row.
-    let mut names: Vec<String> = std::fs::read_dir(&dir)
+    let run = common::run_folder(&dir);
+    let mut names: Vec<String> = std::fs::read_dir(&run)
         .unwrap()
         .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
         .collect();
@@ -266,7 +267,7 @@ async fn a_drain_says_goodbye_admits_nobody_and_ends_within_its_grace() {
         "no .partial left"
     );
     for n in names {
-        let text = std::fs::read_to_string(dir.join(&n)).unwrap();
+        let text = std::fs::read_to_string(run.join(&n)).unwrap();
         let rows: Vec<&str> = text.lines().skip(1).collect();
         let want = if n == "session-2.csv" { 21 } else { 20 };
         assert_eq!(rows.len(), want, "{n}: {text}");

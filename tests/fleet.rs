@@ -2,6 +2,8 @@
 //! it, one instance sent SIGTERM mid-run. Needs nginx (scripts/setup.sh --test installs it)
 //! and fails without it.
 
+mod common;
+
 use std::collections::BTreeMap;
 use std::path::Path;
 
@@ -98,7 +100,8 @@ fn a_drained_instance_hands_its_sessions_to_the_fleet_and_loses_nothing() {
             f["session"].as_u64().unwrap(),
             f["samples"].as_u64().unwrap(),
         );
-        let path = out.join(format!("rec-{victim}/session-{id}.csv"));
+        let path = common::run_folder(&out.join(format!("rec-{victim}")))
+            .join(format!("session-{id}.csv"));
         let text = std::fs::read_to_string(&path).unwrap_or_else(|e| panic!("{path:?}: {e}"));
         let rows: Vec<&str> = text.lines().skip(1).collect();
         assert_eq!(rows.len() as u64, samples, "{path:?}");

@@ -97,7 +97,7 @@ async fn a_recorded_session_replays_to_the_same_frames() {
     };
     let (first, _) = replay(&synthetic, &slow, |_, _| {}).await.unwrap();
     // The session ended with the replay; its recording lands once the server notices.
-    let path = dir.join("session-1.csv");
+    let path = common::run_folder(&dir).join("session-1.csv");
     for _ in 0..50 {
         if path.exists() {
             break;

@@ -57,7 +57,7 @@ pub struct ServerState {
     pub sessions: TaskTracker,
     /// Who may open sessions, read metrics and drain.
     pub access: access::Access,
-    /// Where sessions' received gaze samples are recorded, if anywhere (opt-in).
+    /// This run's recording folder (inside `--record-dir`), if the server records.
     pub record_dir: Option<std::path::PathBuf>,
     /// Each recording session's file, fetchable by its own client only.
     pub recordings: recordings::Recordings,
@@ -75,7 +75,7 @@ pub struct ServerState {
 /// How a server runs beyond its listener and renderer.
 #[derive(Debug, Clone)]
 pub struct ServerOptions {
-    /// Record every session's received gaze samples to `session-<id>.csv` here.
+    /// Record every session's received gaze samples to `run-…/session-<id>.csv` here.
     pub record_dir: Option<std::path::PathBuf>,
     /// Sessions served at once; more are refused with WebSocket close code 1013.
     pub max_sessions: usize,
@@ -119,9 +119,24 @@ pub async fn run_with(
     shutdown: CancellationToken,
     options: ServerOptions,
 ) -> std::io::Result<()> {
-    if let Some(dir) = &options.record_dir {
-        std::fs::create_dir_all(dir)?;
-    }
+    // Each run records into its own folder (ids restart at 1); what a killed run left is
+    // recovered first.
+    let record_dir = match &options.record_dir {
+        Some(dir) => {
+            std::fs::create_dir_all(dir)?;
+            for file in recorder::recover(dir)? {
+                tracing::warn!(
+                    "recovered the recording a stopped run left: {}",
+                    file.display()
+                );
+            }
+            let run = dir.join(recorder::run_folder_name());
+            std::fs::create_dir(&run)?;
+            tracing::info!("recording sessions to {}", run.display());
+            Some(run)
+        }
+        None => None,
+    };
     // Every scene is loaded once here, so a broken file is reported at start-up (and left out)
     // rather than when a client first asks for it.
     let mut cameras = std::collections::HashMap::new();
@@ -158,7 +173,7 @@ pub async fn run_with(
         drain_grace: options.drain,
         sessions: TaskTracker::new(),
         access: options.access,
-        record_dir: options.record_dir,
+        record_dir,
         recordings: Default::default(),
         slots: Arc::new(tokio::sync::Semaphore::new(options.max_sessions.max(1))),
         max_sessions: options.max_sessions.max(1),

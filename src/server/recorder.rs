@@ -1,7 +1,11 @@
 //! Session recording: a session's received gaze samples, in the generic CSV format
 //! (`t_ms, x, y, pupil_mm`), written as they arrive to `session-<id>.csv.partial` and renamed
-//! to `session-<id>.csv` when the session ends, so a finished file is always whole and a crash
-//! leaves the partial one for inspection.
+//! to `session-<id>.csv` when the session ends, so a finished file is always whole.
+//!
+//! Each server run records into its own folder, `run-<unix seconds>-<random>`, so session ids
+//! that restart at 1 never overwrite an earlier run's files. A run that was killed leaves
+//! `.partial` files; the next start recovers them (`recover`): the cut last row is trimmed and
+//! the file renamed to `session-<id>.recovered.csv`.
 
 use std::fs::File;
 use std::io::{BufWriter, Write};
@@ -71,5 +75,91 @@ impl Recorder {
         self.writer.get_ref().sync_all()?;
         std::fs::rename(&self.partial, &self.path)?;
         Ok(self.path)
+    }
+}
+
+/// A new run's folder name: start time and 32 random bits.
+pub fn run_folder_name() -> String {
+    use std::hash::BuildHasher;
+    let now = std::time::SystemTime::now()
+        .duration_since(std::time::UNIX_EPOCH)
+        .map_or(0, |d| d.as_secs());
+    let random = std::collections::hash_map::RandomState::new().hash_one(std::process::id()) as u32;
+    format!("run-{now}-{random:08x}")
+}
+
+/// Recovers the `.partial` recordings that earlier runs under `dir` left (a crash or SIGKILL):
+/// keeps every complete row, drops a cut last row, and renames each to
+/// `<name>.recovered.csv`. Returns the files recovered.
+pub fn recover(dir: &Path) -> std::io::Result<Vec<PathBuf>> {
+    let mut recovered = Vec::new();
+    for run in std::fs::read_dir(dir)? {
+        let run = run?.path();
+        if !run.is_dir() {
+            continue;
+        }
+        for entry in std::fs::read_dir(&run)? {
+            let path = entry?.path();
+            let Some(stem) = path
+                .file_name()
+                .and_then(|n| n.to_str())
+                .and_then(|n| n.strip_suffix(".csv.partial"))
+            else {
+                continue;
+            };
+            let bytes = std::fs::read(&path)?;
+            // Rows end with a newline; whatever follows the last one is a row cut short.
+            let whole = bytes.iter().rposition(|&b| b == b'\n').map_or(0, |i| i + 1);
+            let target = run.join(format!("{stem}.recovered.csv"));
+            std::fs::write(&target, &bytes[..whole])?;
+            std::fs::remove_file(&path)?;
+            recovered.push(target);
+        }
+    }
+    Ok(recovered)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_killed_runs_partial_files_keep_their_whole_rows() {
+        let dir = std::env::temp_dir().join(format!("fovea-recover-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        let run = dir.join("run-1-0");
+        std::fs::create_dir_all(&run).unwrap();
+        std::fs::write(
+            run.join("session-3.csv.partial"),
+            "t_ms,x,y,pupil_mm\n0,0.5,0.5,4\n4,0.5",
+        )
+        .unwrap();
+        std::fs::write(run.join("session-4.csv.partial"), "t_ms,x,y,pupil_mm\n").unwrap();
+        std::fs::write(run.join("session-1.csv"), "t_ms,x,y,pupil_mm\n").unwrap();
+        let mut got = recover(&dir).unwrap();
+        got.sort();
+        assert_eq!(
+            got,
+            [
+                run.join("session-3.recovered.csv"),
+                run.join("session-4.recovered.csv")
+            ]
+        );
+        assert_eq!(
+            std::fs::read_to_string(&got[0]).unwrap(),
+            "t_ms,x,y,pupil_mm\n0,0.5,0.5,4\n"
+        );
+        assert!(!run.join("session-3.csv.partial").exists());
+        assert!(
+            run.join("session-1.csv").exists(),
+            "finished files are left alone"
+        );
+        assert!(recover(&dir).unwrap().is_empty(), "recovery is done once");
+        assert_ne!(
+            run_folder_name(),
+            run_folder_name(),
+            "two runs never share a folder"
+        );
+        let _ = std::fs::remove_dir_all(&dir);
     }
 }

@@ -68,3 +68,19 @@ pub fn view_ray(scene: &fovea::scene::Scene, w: u32, h: u32, k: usize) -> glam::
     let far = inv * ndc;
     (far.truncate() / far.w - glam::Vec3::from(cam.eye)).normalize()
 }
+
+/// The one run folder (`run-…`) a server made inside its `--record-dir`.
+pub fn run_folder(record_dir: &std::path::Path) -> std::path::PathBuf {
+    let runs: Vec<_> = std::fs::read_dir(record_dir)
+        .unwrap_or_else(|e| panic!("{}: {e}", record_dir.display()))
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.is_dir())
+        .collect();
+    assert_eq!(
+        runs.len(),
+        1,
+        "one run folder in {}: {runs:?}",
+        record_dir.display()
+    );
+    runs[0].clone()
+}
