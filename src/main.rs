@@ -123,11 +123,11 @@ enum Command {
         /// Pupil diameter in mm (1–10); sets the depth of field.
         #[arg(long, default_value_t = fovea::render::DEFAULT_PUPIL_MM)]
         pupil_mm: f32,
-        /// Physical width of the displayed frame, cm.
-        #[arg(long, default_value_t = 53.0)]
+        /// Physical width of the displayed frame, cm (1–1000, as `hello.display`).
+        #[arg(long, default_value_t = 53.0, value_parser = cli::parse::display_width_cm)]
         display_width_cm: f64,
-        /// Viewing distance, cm.
-        #[arg(long, default_value_t = 60.0)]
+        /// Viewing distance, cm (1–10000, as `hello.display`).
+        #[arg(long, default_value_t = 60.0, value_parser = cli::parse::distance_cm)]
         distance_cm: f64,
         /// Single-knob overrides: the protocol's `settings` knobs (docs/protocol.md).
         #[command(flatten)]

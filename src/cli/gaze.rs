@@ -4,7 +4,8 @@ use std::path::PathBuf;
 
 use anyhow::{Context, Result};
 
-use super::parse::{parse_size, url_is_allowed};
+use super::parse::parse_size;
+use super::target::url_is_allowed;
 
 #[derive(clap::Args)]
 pub struct RecordingArgs {
@@ -91,17 +92,17 @@ pub struct ReplayArgs {
     /// The server's session token, sent as `Authorization: Bearer …` (or FOVEA_TOKEN).
     #[arg(long, env = "FOVEA_TOKEN", hide_env_values = true)]
     pub token: Option<String>,
-    /// Playback speed factor (2 = twice as fast).
-    #[arg(long, default_value_t = 1.0)]
+    /// Playback speed factor (2 = twice as fast), 0.01 to 100.
+    #[arg(long, default_value_t = 1.0, value_parser = speed)]
     pub speed: f64,
-    /// Start this many seconds into the recording.
-    #[arg(long, default_value_t = 0.0, alias = "start-s")]
+    /// Start this many seconds into the recording (0 to a week).
+    #[arg(long, default_value_t = 0.0, alias = "start-s", value_parser = recording_seconds)]
     pub start: f64,
-    /// Play only this many seconds of it.
-    #[arg(long, alias = "duration-s")]
+    /// Play only this many seconds of it (up to a week).
+    #[arg(long, alias = "duration-s", value_parser = recording_seconds)]
     pub duration: Option<f64>,
-    /// Play the selection this many times.
-    #[arg(long = "loop", default_value_t = 1)]
+    /// Play the selection this many times (1 to 1000).
+    #[arg(long = "loop", default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..=1000))]
     pub loops: u32,
     /// Scene the session asks for.
     #[arg(long, default_value = fovea::scene::DEFAULT_SCENE, value_parser = super::parse::scene_names())]
@@ -230,4 +231,15 @@ pub fn gaze(a: GazeArgs) -> Result<()> {
         eprintln!("wrote {0}/gaze.md, gaze.svg and gaze.png", dir.display());
     }
     Ok(())
+}
+
+/// A replay speed: finite, 0.01× to 100× (a 1e-300 speed would stretch a schedule past any
+/// timer; faster than 100× floods rather than replays).
+fn speed(s: &str) -> Result<f64, String> {
+    super::parse::number_in(s, 0.01, 100.0)
+}
+
+/// A time within a recording, seconds: finite, 0 to a week (the longest recording taken).
+fn recording_seconds(s: &str) -> Result<f64, String> {
+    super::parse::number_in(s, 0.0, fovea::gaze::formats::MAX_SPAN_DAYS * 86_400.0)
 }

@@ -5,7 +5,7 @@ use std::path::PathBuf;
 use anyhow::{bail, Context, Result};
 
 use super::gaze::RecordingArgs;
-use super::parse::url_is_allowed;
+use super::target::url_is_allowed;
 
 #[derive(clap::Args)]
 pub struct LoadArgs {

@@ -8,3 +8,4 @@ pub mod parse;
 pub mod radiosity;
 pub mod scenes;
 pub mod serve;
+pub mod target;

@@ -44,30 +44,6 @@ pub fn parse_size(s: &str) -> Result<(u32, u32)> {
     Ok((w, h))
 }
 
-/// Replay and load generate traffic: only loopback targets, or hosts named with --allow-host.
-pub fn url_is_allowed(url: &str, allowed: &[String]) -> Result<String> {
-    let rest = url
-        .strip_prefix("ws://")
-        .with_context(|| format!("{url:?}: expected ws://HOST:PORT/ws"))?;
-    let host = if rest.starts_with('[') {
-        rest.split(']')
-            .next()
-            .map(|h| format!("{h}]"))
-            .unwrap_or_default()
-    } else {
-        rest.split(['/', ':']).next().unwrap_or("").to_string()
-    };
-    let loopback = host == "localhost"
-        || host == "[::1]"
-        || host
-            .parse::<std::net::Ipv4Addr>()
-            .is_ok_and(|ip| ip.is_loopback());
-    if !loopback && !allowed.iter().any(|a| *a == host) {
-        bail!("{url:?}: only loopback servers (127.0.0.0/8, localhost, [::1]) or hosts given with --allow-host may be targeted");
-    }
-    Ok(url.to_string())
-}
-
 /// The built-in scenes as clap's possible values, so `--help` lists them and a typo is refused
 /// with the list.
 pub fn scene_names() -> clap::builder::PossibleValuesParser {
@@ -76,9 +52,24 @@ pub fn scene_names() -> clap::builder::PossibleValuesParser {
 
 /// A duration in seconds from a flag: finite and within 0.1 s … 1 h.
 pub fn parse_seconds(s: &str) -> Result<f64, String> {
+    number_in(s, 0.1, 3600.0)
+}
+
+/// `--display-width-cm`: the range a `hello` is held to.
+pub fn display_width_cm(s: &str) -> Result<f64, String> {
+    number_in(s, 1.0, 1000.0)
+}
+
+/// `--distance-cm`: the range a `hello` is held to.
+pub fn distance_cm(s: &str) -> Result<f64, String> {
+    number_in(s, 1.0, 10_000.0)
+}
+
+/// A finite number in [lo, hi] from a flag.
+pub fn number_in(s: &str, lo: f64, hi: f64) -> Result<f64, String> {
     let v: f64 = s.trim().parse().map_err(|e| format!("{s:?}: {e}"))?;
-    if !(0.1..=3600.0).contains(&v) {
-        return Err(format!("{s:?}: seconds must lie in [0.1, 3600]"));
+    if !(lo..=hi).contains(&v) {
+        return Err(format!("{s:?}: must lie in [{lo}, {hi}]"));
     }
     Ok(v)
 }

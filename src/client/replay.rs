@@ -136,7 +136,14 @@ pub async fn pace(
     mut send: impl FnMut(usize, f64) -> bool,
 ) {
     for &(at_ms, index) in plan {
-        tokio::time::sleep_until(start + Duration::from_secs_f64(at_ms / 1000.0)).await;
+        // A time no timer can hold (negative, NaN, centuries) ends the replay, never panics.
+        let Ok(at) = Duration::try_from_secs_f64(at_ms / 1000.0) else {
+            break;
+        };
+        let Some(deadline) = start.checked_add(at) else {
+            break;
+        };
+        tokio::time::sleep_until(deadline).await;
         if !send(index, at_ms) {
             break;
         }

@@ -6,7 +6,7 @@ use std::collections::HashMap;
 
 mod types;
 
-pub use types::{Columns, Format, FormatError, ParseOptions, Recording};
+pub use types::{Columns, Format, FormatError, ParseOptions, Recording, MAX_SPAN_DAYS};
 
 use super::Sample;
 
@@ -132,8 +132,9 @@ pub fn parse(text: &str, opts: &ParseOptions) -> Result<Recording, FormatError> 
             if v.is_empty() || v.eq_ignore_ascii_case("nan") {
                 return Ok(None);
             }
+            // inf and -nan parse as floats; a value that is not finite is no value.
             v.parse::<f64>()
-                .map(Some)
+                .map(|n| n.is_finite().then_some(n))
                 .map_err(|_| FormatError::NotNumeric {
                     line: line_no,
                     column: names.get(k).copied().unwrap_or("?").to_string(),
@@ -144,7 +145,7 @@ pub fn parse(text: &str, opts: &ParseOptions) -> Result<Recording, FormatError> 
             return Err(FormatError::NotNumeric {
                 line: line_no,
                 column: names[t_col].to_string(),
-                value: String::new(),
+                value: fields.get(t_col).copied().unwrap_or("").to_string(),
             });
         };
         let t = t_raw * t_scale;
@@ -160,6 +161,14 @@ pub fn parse(text: &str, opts: &ParseOptions) -> Result<Recording, FormatError> 
         }
         previous = t;
         let start = *t0.get_or_insert(t);
+        let days = (t - start) / 86_400_000.0;
+        if !(days <= types::MAX_SPAN_DAYS) {
+            return Err(FormatError::TooLong {
+                line: line_no,
+                t: t - start,
+                days,
+            });
+        }
         let (x, y) = (number(x_col)?, number(y_col)?);
         let confident = match conf_col {
             Some(k) => number(k)?.is_some_and(|c| c >= opts.min_confidence),
@@ -237,6 +246,30 @@ pub fn write_generic(samples: &[Sample]) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn non_finite_values_are_refused_or_missing_never_used() {
+        let generic = |text: &str| {
+            let opts = ParseOptions {
+                format: Some(Format::Generic),
+                ..ParseOptions::default()
+            };
+            parse(text, &opts)
+        };
+        let head = "t_ms,x,y\n";
+        for bad_time in ["inf", "-inf", "nan", "-nan", "1e400"] {
+            let text = format!("{head}0,0.5,0.5\n{bad_time},0.5,0.5\n");
+            assert!(generic(&text).is_err(), "time {bad_time}");
+        }
+        let far = generic(&format!("{head}0,0.5,0.5\n1e300,0.5,0.5\n"));
+        assert!(
+            matches!(far, Err(FormatError::TooLong { line: 3, .. })),
+            "{far:?}"
+        );
+        let rec = generic(&format!("{head}0,-nan,0.5\n1,0.5,inf\n2,0.5,0.5\n")).unwrap();
+        let xy: Vec<_> = rec.samples.iter().map(|s| s.xy).collect();
+        assert_eq!(xy, [None, None, Some([0.5, 0.5])]);
+    }
 
     fn eyelink() -> ParseOptions {
         ParseOptions {

@@ -102,7 +102,13 @@ pub enum FormatError {
     TimeUnit(String),
     #[error("the file has a header but no samples")]
     NoSamples,
+    #[error("line {line}: time {t} ms is {days:.0} days after the first sample; Fovea replays at most {MAX_SPAN_DAYS} days (is --time-unit right?)")]
+    TooLong { line: usize, t: f64, days: f64 },
 }
+
+/// The longest recording Fovea takes, first sample to last: a bound that keeps schedules and
+/// timers finite (a stray 1e300 timestamp would overflow them).
+pub const MAX_SPAN_DAYS: f64 = 7.0;
 
 /// The parsed recording and what was decided on the way, to print for the user.
 #[derive(Debug, Clone, PartialEq)]
