@@ -42,8 +42,11 @@ pub struct RecordingArgs {
 
 impl RecordingArgs {
     pub fn load(&self) -> Result<fovea::gaze::formats::Recording> {
-        let text = std::fs::read_to_string(&self.file)
+        // An hour at 2000 Hz is ~300 MB of CSV; more is not a recording (or is /dev/zero).
+        let bytes = fovea::scene::limits::read_capped(&self.file, 1 << 30)
             .with_context(|| format!("reading {}", self.file.display()))?;
+        let text = String::from_utf8(bytes)
+            .with_context(|| format!("{} is not UTF-8 text", self.file.display()))?;
         let screen = self.screen.as_deref().map(parse_size).transpose()?;
         let opts = fovea::gaze::formats::ParseOptions {
             format: self.format,
