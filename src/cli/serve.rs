@@ -7,12 +7,19 @@ use anyhow::{Context, Result};
 use fovea::render::{RenderThread, Renderer};
 use tokio_util::sync::CancellationToken;
 
+/// What to do when the adapter cannot run Fovea (said once, where the server refuses to start).
+const DRIVER_HINT: &str = "Fovea needs a Vulkan (or Metal, DX12) adapter: install a Vulkan \
+driver (without a GPU: `apt-get install mesa-vulkan-drivers`, Mesa's lavapipe) and leave \
+WGPU_BACKEND unset or set to vulkan";
+
 pub fn serve(addr: SocketAddr, options: fovea::server::ServerOptions) -> Result<()> {
-    let mut renderer = Renderer::new().context("opening the GPU")?;
+    let mut renderer =
+        Renderer::new().map_err(|e| anyhow::anyhow!("opening the GPU: {e}. {DRIVER_HINT}"))?;
     renderer.set_catalog(options.catalog.clone());
     renderer
         .load_scene(fovea::scene::DEFAULT_SCENE)
         .context("loading the default scene")?;
+    self_test(&mut renderer)?;
     // Scenes from --scenes folders go onto the GPU now (built-in ones are small), so the first
     // viewer of a large model does not hold the render thread, and every session, while it loads.
     for entry in options
@@ -45,6 +52,22 @@ pub fn serve(addr: SocketAddr, options: fovea::server::ServerOptions) -> Result<
     // Every RenderHandle is gone with the server, so the render thread is finishing too.
     let _ = render_thread.join();
     Ok(())
+}
+
+/// Renders one tiny frame before serving: an adapter that lists itself but cannot run the
+/// passes (the GL backend has no float render targets) is refused here, in one line, instead of
+/// answering /readyz 200 and failing every frame.
+fn self_test(renderer: &mut Renderer) -> Result<()> {
+    let probe = fovea::render::FrameRequest::new(fovea::scene::DEFAULT_SCENE, 16, 16);
+    let result = renderer.render(&probe);
+    renderer.release_stream(probe.stream);
+    match result {
+        Ok(_) => Ok(()),
+        Err(e) => anyhow::bail!(
+            "the GPU adapter {} cannot run Fovea's passes ({e}). {DRIVER_HINT}",
+            renderer.adapter()
+        ),
+    }
 }
 
 async fn stop_on_signal(shutdown: CancellationToken) {

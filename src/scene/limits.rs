@@ -25,7 +25,10 @@ pub fn read_capped(path: &std::path::Path, max: u64) -> std::io::Result<Vec<u8>>
     let too_big = |n: &dyn std::fmt::Display| {
         std::io::Error::new(
             std::io::ErrorKind::InvalidData,
-            format!("{} is {n} bytes; files over {max} bytes are refused", path.display()),
+            format!(
+                "{} is {n} bytes; files over {max} bytes are refused",
+                path.display()
+            ),
         )
     };
     let file = std::fs::File::open(path)?;
