@@ -102,3 +102,29 @@ pub async fn make(render: RenderHandle, job: FrameJob) -> Result<MadeFrame, Fram
         times,
     })
 }
+
+/// Whether `message` is the first failure of its kind (the message up to its first colon) the
+/// client hears of: a broken frame repeats at the sample rate, the client is told once.
+pub fn first_of_its_kind(told: &mut std::collections::HashSet<String>, message: &str) -> bool {
+    told.insert(message.split(':').next().unwrap_or("").to_string())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn each_kind_of_failure_is_told_once() {
+        let mut told = Default::default();
+        assert!(first_of_its_kind(
+            &mut told,
+            "render: device lost (frame 3)"
+        ));
+        assert!(!first_of_its_kind(
+            &mut told,
+            "render: device lost (frame 4)"
+        ));
+        assert!(first_of_its_kind(&mut told, "encode: out of memory"));
+        assert!(!first_of_its_kind(&mut told, "encode: out of memory"));
+    }
+}

@@ -46,6 +46,8 @@ struct Session {
     recorder: Option<Recorder>,
     /// The camera as `camera` messages moved it; `None`: the scene's own.
     camera: Option<crate::scene::Camera>,
+    /// Kinds of frame failure the client has been told of.
+    failures_told: std::collections::HashSet<String>,
 }
 
 pub async fn run(socket: WebSocket, state: Arc<ServerState>, id: u64) {
@@ -174,6 +176,7 @@ impl Session {
             latency_ms: None,
             recorder,
             camera: None,
+            failures_told: Default::default(),
         }
     }
 
@@ -364,8 +367,12 @@ impl Session {
                 if let Some(p) = self.pacer.as_mut() {
                     p.frame_failed(f.frame);
                 }
-                tracing::warn!(session = self.id, "frame failed: {}", f.error.message);
                 ::metrics::counter!("fovea_frames_failed_total").increment(1);
+                if !frame_maker::first_of_its_kind(&mut self.failures_told, &f.error.message) {
+                    tracing::debug!(session = self.id, "frame failed again: {}", f.error.message);
+                    return Vec::new();
+                }
+                tracing::warn!(session = self.id, "frame failed: {}", f.error.message);
                 vec![Outgoing::Text(f.error.into())]
             }
         }
