@@ -119,24 +119,11 @@ pub async fn run_with(
     shutdown: CancellationToken,
     options: ServerOptions,
 ) -> std::io::Result<()> {
-    // Each run records into its own folder (ids restart at 1); what a killed run left is
-    // recovered first.
-    let record_dir = match &options.record_dir {
-        Some(dir) => {
-            std::fs::create_dir_all(dir)?;
-            for file in recorder::recover(dir)? {
-                tracing::warn!(
-                    "recovered the recording a stopped run left: {}",
-                    file.display()
-                );
-            }
-            let run = dir.join(recorder::run_folder_name());
-            std::fs::create_dir(&run)?;
-            tracing::info!("recording sessions to {}", run.display());
-            Some(run)
-        }
-        None => None,
-    };
+    let record_dir = options
+        .record_dir
+        .as_deref()
+        .map(recorder::start_run)
+        .transpose()?;
     // Every scene is loaded once here, so a broken file is reported at start-up (and left out)
     // rather than when a client first asks for it.
     let mut cameras = std::collections::HashMap::new();

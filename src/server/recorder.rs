@@ -78,6 +78,21 @@ impl Recorder {
     }
 }
 
+/// Makes this run's folder inside `dir` after recovering what killed runs left there.
+pub fn start_run(dir: &Path) -> std::io::Result<PathBuf> {
+    std::fs::create_dir_all(dir)?;
+    for file in recover(dir)? {
+        tracing::warn!(
+            "recovered the recording a stopped run left: {}",
+            file.display()
+        );
+    }
+    let run = dir.join(run_folder_name());
+    std::fs::create_dir(&run)?;
+    tracing::info!("recording sessions to {}", run.display());
+    Ok(run)
+}
+
 /// A new run's folder name: start time and 32 random bits.
 pub fn run_folder_name() -> String {
     use std::hash::BuildHasher;
