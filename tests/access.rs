@@ -175,11 +175,11 @@ async fn a_drain_says_goodbye_admits_nobody_and_ends_within_its_grace() {
     .await;
     let url = format!("ws://{addr}/ws");
     // Two sessions, each with gaze the server has answered (so it has recorded it).
-    let (mut leaver, mut stayer) = (
-        Client::connect(&url).await.unwrap(),
-        Client::connect(&url).await.unwrap(),
-    );
-    for c in [&mut leaver, &mut stayer] {
+    // Each connects just before its hello: a silent socket is closed after --hello-timeout-s,
+    // and the first frame can take seconds while a cold driver compiles the shaders.
+    let mut clients = Vec::new();
+    for _ in 0..2 {
+        let mut c = Client::connect(&url).await.unwrap();
         c.hello(&hello()).await.unwrap();
         for seq in 1..=20u64 {
             let g = Gaze {
@@ -192,11 +192,13 @@ async fn a_drain_says_goodbye_admits_nobody_and_ends_within_its_grace() {
             c.gaze(&g).await.unwrap();
         }
         until(
-            c,
+            &mut c,
             |e| matches!(e, Event::Frame { header, .. } if header.samples == 20),
         )
         .await;
+        clients.push(c);
     }
+    let (mut leaver, mut stayer) = (clients.remove(0), clients.remove(0));
     assert_eq!(http(addr, "GET", "/readyz", None).await.0, 200);
     assert_eq!(http(addr, "POST", "/admin/drain", None).await.0, 401);
     assert_eq!(
