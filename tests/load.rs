@@ -143,6 +143,14 @@ async fn admission_stalls_and_the_load_report() {
         recording: None,
     };
     let report = run(&opts, |_, _| {}).await;
+    // The sessions end as the tool leaves; the count is read once they have.
+    for _ in 0..100 {
+        let m = http_get(addr, "/metrics").await;
+        if metric(&m, "fovea_sessions_active") == 0.0 {
+            break;
+        }
+        tokio::time::sleep(Duration::from_millis(50)).await;
+    }
     let after = metric(&http_get(addr, "/metrics").await, "fovea_frames_sent_total");
     assert_eq!(report.refused + report.connection_failures, 0);
     assert!(report.frames > 5, "{report:?}");

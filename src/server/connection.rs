@@ -186,6 +186,9 @@ async fn write(
             return;
         }
         if let Some(mut t) = times {
+            // Counted here, as the bytes leave: a session that ends with a timing record
+            // still queued would otherwise not count a frame its client received.
+            ::metrics::counter!("fovea_frames_sent_total").increment(1);
             t.sent = Some(Instant::now());
             let _ = sent.send(t);
         }

@@ -381,7 +381,6 @@ impl Session {
     /// The writer handed a frame to the socket: metrics, logs and the latency estimate all
     /// come from its one timing record.
     fn frame_sent(&mut self, times: &FrameTimes) {
-        ::metrics::counter!("fovea_frames_sent_total").increment(1);
         times.record_metrics();
         let s = times.stages();
         tracing::debug!(
