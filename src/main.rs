@@ -69,6 +69,10 @@ enum Command {
         /// sockets cannot hold session slots.
         #[arg(long, default_value_t = 5.0, value_parser = cli::parse::parse_seconds)]
         hello_timeout_s: f64,
+        /// Seconds between WebSocket pings to each client; one from which nothing, not even a
+        /// pong, has come for three is disconnected (half-open connections, dead peers).
+        #[arg(long, default_value_t = 10.0, value_parser = cli::parse::parse_seconds)]
+        ping_every_s: f64,
         /// Seconds a drain (SIGTERM, POST /admin/drain) gives sessions to move to another
         /// instance: they are sent `goodbye` at once and closed with 1001 when it ends.
         #[arg(long, default_value_t = 10.0, value_parser = cli::parse::parse_seconds)]
@@ -194,6 +198,7 @@ fn main() -> Result<()> {
             max_sessions,
             stall_timeout_s,
             hello_timeout_s,
+            ping_every_s,
             drain_s,
             access,
         } => {
@@ -206,6 +211,7 @@ fn main() -> Result<()> {
                     max_sessions: max_sessions as usize,
                     stall_timeout: std::time::Duration::from_secs_f64(stall_timeout_s),
                     hello_timeout: std::time::Duration::from_secs_f64(hello_timeout_s),
+                    ping_every: std::time::Duration::from_secs_f64(ping_every_s),
                     catalog: fovea::scene::Catalog::with_folders(&scenes)?,
                     drain: std::time::Duration::from_secs_f64(drain_s),
                     access,

@@ -67,3 +67,79 @@ async fn violations_close_with_their_codes() {
     drop(c);
     server.stop().await;
 }
+
+/// A client that neither reads nor sends (a dead peer, a half-open connection) is let go after
+/// three unanswered pings, long before the stall timeout; one that reads answers the pings and
+/// keeps its session.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn pings_let_go_of_a_silent_client_and_keep_a_reading_one() {
+    let ping = Duration::from_millis(200);
+    let (addr, server) = common::start(ServerOptions {
+        max_sessions: 1,
+        ping_every: ping,
+        stall_timeout: Duration::from_secs(60),
+        ..ServerOptions::default()
+    })
+    .await;
+    let url = format!("ws://{addr}/ws");
+    let (mut dead, _) = tokio_tungstenite::connect_async(&url).await.unwrap();
+    let hello = r#"{"type":"hello","v":1,"width":32,"height":32}"#;
+    dead.send(Message::Text(hello.into())).await.unwrap();
+    // From here `dead` is never polled again: no pong ever leaves it.
+    let began = std::time::Instant::now();
+    let mut viewer = loop {
+        let mut c = Client::connect(&url).await.unwrap();
+        let h = fovea::protocol::Hello {
+            width: 32,
+            height: 32,
+            ..Default::default()
+        };
+        if c.hello(&h).await.is_ok() {
+            break c;
+        }
+        assert!(
+            began.elapsed() < Duration::from_secs(20),
+            "the slot was never freed"
+        );
+        tokio::time::sleep(Duration::from_millis(100)).await;
+    };
+    let freed = began.elapsed();
+    assert!(
+        freed >= 3 * ping,
+        "let go after {freed:?}, before three pings"
+    );
+    // The viewer reads (and so answers pings) for ten ping periods and still has its session.
+    let until = std::time::Instant::now() + 10 * ping;
+    while std::time::Instant::now() < until {
+        match viewer.next_event(Duration::from_millis(100)).await {
+            Ok(Event::Closed(c)) => panic!("a reading client was closed: {c:?}"),
+            Ok(_) | Err(fovea::client::ClientError::Timeout(_)) => {}
+            Err(e) => panic!("{e}"),
+        }
+    }
+    let g = fovea::protocol::Gaze {
+        seq: 1,
+        t_ms: 1.0,
+        x: 0.2,
+        y: 0.2,
+        pupil_mm: None,
+    };
+    viewer.gaze(&g).await.unwrap();
+    loop {
+        match viewer.next_event(WAIT).await.unwrap() {
+            Event::Frame { header, .. } if header.seq == Some(1) => break,
+            Event::Frame { header, .. } => {
+                let ack = fovea::protocol::Ack {
+                    frame: header.frame,
+                    t_ms: None,
+                    dropped: false,
+                };
+                viewer.ack(&ack).await.unwrap();
+            }
+            Event::Closed(c) => panic!("closed: {c:?}"),
+            _ => {}
+        }
+    }
+    drop((dead, viewer));
+    server.stop().await;
+}

@@ -1,8 +1,12 @@
 //! A session's WebSocket as two tasks: a reader that parses client messages into a channel and
 //! a writer that sends the session's messages with a deadline. A slow send therefore never stops
 //! the session from reading (acks, gaze, settings keep flowing), and a client that stops
-//! reading is noticed: its send times out, or its outgoing queue fills.
+//! reading is noticed: its send times out, or its outgoing queue fills. The writer also pings
+//! every `ping_every`; a peer from which nothing (not even a pong) has come for three pings is
+//! gone (a half-open connection, a client that neither reads nor sends).
 
+use std::sync::atomic::{AtomicU64, Ordering};
+use std::sync::Arc;
 use std::time::{Duration, Instant};
 
 use axum::extract::ws::{CloseFrame, Message, WebSocket};
@@ -39,6 +43,8 @@ pub enum Outgoing {
     /// A frame's binary message and its timing record (the writer stamps `sent`).
     Frame(Vec<u8>, FrameTimes),
     Close(CloseFrame),
+    /// A WebSocket ping (the writer's own keepalive).
+    Ping,
 }
 
 /// The outgoing queue is full or the writer has stopped: the client is not reading.
@@ -60,14 +66,30 @@ pub struct Connection {
 }
 
 impl Connection {
-    pub fn open(socket: WebSocket, limits: Limits, send_timeout: Duration, id: u64) -> Self {
+    pub fn open(
+        socket: WebSocket,
+        limits: Limits,
+        send_timeout: Duration,
+        ping_every: Duration,
+        id: u64,
+    ) -> Self {
         let (sink, stream) = socket.split();
         let (in_tx, incoming) = mpsc::channel(INCOMING);
         let (outgoing, out_rx) = mpsc::channel(OUTGOING);
         let (sent_tx, sent) = mpsc::unbounded_channel();
         let gone = CancellationToken::new();
-        let reader = tokio::spawn(read(stream, in_tx, limits, id));
-        let writer = tokio::spawn(write(sink, out_rx, sent_tx, gone.clone(), send_timeout, id));
+        let opened = Instant::now();
+        let heard = Arc::new(AtomicU64::new(0));
+        let reader = tokio::spawn(read(stream, in_tx, limits, (opened, heard.clone()), id));
+        let writer = tokio::spawn(write(
+            sink,
+            out_rx,
+            sent_tx,
+            gone.clone(),
+            (send_timeout, ping_every),
+            (opened, heard),
+            id,
+        ));
         Connection {
             incoming,
             outgoing,
@@ -102,13 +124,18 @@ impl Connection {
     }
 }
 
+/// When the connection opened, and when the client was last heard from (ms after that).
+type Heard = (Instant, Arc<AtomicU64>);
+
 async fn read(
     mut stream: futures_util::stream::SplitStream<WebSocket>,
     incoming: mpsc::Sender<Incoming>,
     limits: Limits,
+    (opened, heard): Heard,
     id: u64,
 ) {
     while let Some(msg) = stream.next().await {
+        heard.store(opened.elapsed().as_millis() as u64, Ordering::Relaxed);
         let parsed = match msg {
             Err(e) => {
                 tracing::debug!(session = id, "socket error: {e}");
@@ -165,11 +192,30 @@ async fn write(
     mut outgoing: mpsc::Receiver<Outgoing>,
     sent: mpsc::UnboundedSender<FrameTimes>,
     gone: CancellationToken,
-    send_timeout: Duration,
+    (send_timeout, ping_every): (Duration, Duration),
+    (opened, heard): Heard,
     id: u64,
 ) {
-    while let Some(message) = outgoing.recv().await {
+    let mut ping = tokio::time::interval_at(tokio::time::Instant::now() + ping_every, ping_every);
+    loop {
+        let message = tokio::select! {
+            m = outgoing.recv() => match m {
+                Some(m) => m,
+                None => return,
+            },
+            _ = ping.tick() => {
+                let silent = opened.elapsed().saturating_sub(Duration::from_millis(heard.load(Ordering::Relaxed)));
+                if silent > 3 * ping_every {
+                    ::metrics::counter!("fovea_sessions_unresponsive_total").increment(1);
+                    tracing::info!(session = id, "nothing from the client for {silent:?}, not even a pong: closing");
+                    gone.cancel();
+                    return;
+                }
+                Outgoing::Ping
+            }
+        };
         let (msg, times, closing) = match message {
+            Outgoing::Ping => (Message::Ping(Vec::new().into()), None, false),
             Outgoing::Text(m) => (Message::Text(m.to_json().into()), None, false),
             Outgoing::Frame(bytes, times) => (Message::Binary(bytes.into()), Some(times), false),
             Outgoing::Close(frame) => (Message::Close(Some(frame)), None, true),

@@ -67,6 +67,8 @@ pub struct ServerState {
     pub max_sessions: usize,
     /// A client that neither acknowledges frames nor reads for this long is disconnected.
     pub stall_timeout: Duration,
+    /// WebSocket pings this often; a client silent for three (no pong either) is gone.
+    pub ping_every: Duration,
     /// A socket that has not said hello this long after opening is closed (1008), so silent
     /// sockets cannot hold session slots.
     pub hello_timeout: Duration,
@@ -81,6 +83,8 @@ pub struct ServerOptions {
     pub max_sessions: usize,
     /// Disconnect a client with frames outstanding and no acknowledgement for this long.
     pub stall_timeout: Duration,
+    /// Ping each client this often; one silent for three pings is disconnected.
+    pub ping_every: Duration,
     /// Close a socket that has not said hello this long after opening.
     pub hello_timeout: Duration,
     /// The scenes clients may name (the renderer must have the same catalog).
@@ -96,6 +100,7 @@ impl Default for ServerOptions {
             record_dir: None,
             max_sessions: 16,
             stall_timeout: Duration::from_secs(10),
+            ping_every: Duration::from_secs(10),
             hello_timeout: Duration::from_secs(5),
             catalog: crate::scene::Catalog::builtin(),
             drain: Duration::from_secs(10),
@@ -165,6 +170,7 @@ pub async fn run_with(
         slots: Arc::new(tokio::sync::Semaphore::new(options.max_sessions.max(1))),
         max_sessions: options.max_sessions.max(1),
         stall_timeout: options.stall_timeout,
+        ping_every: options.ping_every,
         hello_timeout: options.hello_timeout,
     });
     // The exporter's histograms keep growing buckets until upkeep drains them; it runs on a

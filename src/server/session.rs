@@ -52,7 +52,13 @@ struct Session {
 
 pub async fn run(socket: WebSocket, state: Arc<ServerState>, id: u64) {
     tracing::info!(session = id, "session opened");
-    let mut conn = Connection::open(socket, state.limits.clone(), state.stall_timeout, id);
+    let mut conn = Connection::open(
+        socket,
+        state.limits.clone(),
+        state.stall_timeout,
+        state.ping_every,
+        id,
+    );
     let mut s = Session::new(id, state.clone());
     let mut making: Option<Making> = None;
     let mut sent = 0u64;
