@@ -173,3 +173,45 @@ async fn a_replay_follows_a_goodbye_to_the_next_instance() {
     );
     second.stop().await;
 }
+
+/// A live session's rows reach its file within a second even when samples stop coming.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn a_live_recording_is_at_most_a_second_behind() {
+    let dir = std::env::temp_dir().join(format!("fovea-flush-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    let (url, server) = server(Some(dir.clone())).await;
+    let mut c = fovea::client::Client::connect(&url).await.unwrap();
+    c.hello(&options(&url).hello).await.unwrap();
+    for seq in 1..=3u64 {
+        let g = fovea::protocol::Gaze {
+            seq,
+            t_ms: seq as f64,
+            x: 0.4,
+            y: 0.4,
+            pupil_mm: None,
+        };
+        c.gaze(&g).await.unwrap();
+    }
+    // The samples are in once a frame says so; then nothing more is sent.
+    loop {
+        match c.next_event(Duration::from_secs(30)).await.unwrap() {
+            fovea::client::Event::Frame { header, .. } if header.samples == 3 => break,
+            fovea::client::Event::Frame { header, .. } => {
+                let ack = fovea::protocol::Ack {
+                    frame: header.frame,
+                    t_ms: None,
+                    dropped: false,
+                };
+                c.ack(&ack).await.unwrap();
+            }
+            _ => {}
+        }
+    }
+    tokio::time::sleep(Duration::from_millis(1500)).await;
+    let partial = common::run_folder(&dir).join("session-1.csv.partial");
+    let text = std::fs::read_to_string(&partial).unwrap();
+    assert_eq!(text.lines().count(), 4, "header and three rows: {text:?}");
+    drop(c);
+    server.stop().await;
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -5,6 +5,7 @@
 pub mod access;
 mod app;
 mod assets;
+mod camera;
 mod connection;
 mod drain;
 mod frame_maker;

@@ -66,6 +66,17 @@ impl Recorder {
         }
     }
 
+    /// Writes out buffered rows (the session calls it every second, so rows reach the file
+    /// within a second even when samples stop coming).
+    pub fn flush(&mut self) {
+        if self.error.is_none() {
+            if let Err(e) = self.writer.flush() {
+                self.error = Some(e);
+            }
+            self.flushed = std::time::Instant::now();
+        }
+    }
+
     /// Flushes, syncs and renames into place.
     pub fn finish(mut self) -> std::io::Result<PathBuf> {
         if let Some(e) = self.error.take() {

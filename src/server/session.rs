@@ -64,6 +64,7 @@ pub async fn run(socket: WebSocket, state: Arc<ServerState>, id: u64) {
     let mut sent = 0u64;
     let hello_by = tokio::time::Instant::now() + state.hello_timeout;
     let mut told_goodbye = false;
+    let mut flush = tokio::time::interval(Duration::from_secs(1));
     let close = loop {
         if making.is_none() {
             if let Some(job) = s.next_job() {
@@ -94,6 +95,12 @@ pub async fn run(socket: WebSocket, state: Arc<ServerState>, id: u64) {
                 break Some(close_frame(1008, format!("no hello within {secs} s")));
             }
             _ = conn.gone.cancelled() => break None,
+            _ = flush.tick(), if s.recorder.is_some() => {
+                if let Some(r) = s.recorder.as_mut() {
+                    r.flush();
+                }
+                Vec::new()
+            }
             incoming = conn.incoming.recv() => match incoming {
                 None => break None,
                 Some(Incoming::Invalid(e)) => vec![Outgoing::Text(e.into())],
@@ -230,7 +237,7 @@ impl Session {
             ClientMessage::Camera(m) => {
                 let scene = self.hello.as_ref().map(|h| h.scene.as_str()).unwrap_or("");
                 let base = self.state.cameras.get(scene).copied()?;
-                match moved_camera(base, self.camera.unwrap_or(base), &m) {
+                match super::camera::moved(base, self.camera.unwrap_or(base), &m) {
                     Ok(c) => {
                         self.camera = Some(c);
                         pacer.on_settings(now);
@@ -424,73 +431,4 @@ fn error(code: ErrorCode, message: String) -> ServerMessage {
 
 fn knob_error(e: KnobError) -> ServerMessage {
     ProtocolError::from(e).into()
-}
-
-/// The camera after a `camera` message (see `protocol::CameraMove` for the order), or why not.
-fn moved_camera(
-    base: crate::scene::Camera,
-    current: crate::scene::Camera,
-    m: &crate::protocol::CameraMove,
-) -> Result<crate::scene::Camera, String> {
-    let f = |v: [f64; 3]| v.map(|x| x as f32);
-    let mut c = if m.reset { base } else { current };
-    if let Some(p) = m.pose {
-        c.eye = f(p.eye);
-        c.target = f(p.target);
-        c.up = p.up.map_or(c.up, f);
-    }
-    if let Some([yaw, pitch]) = m.orbit_deg {
-        c = c.orbit(yaw as f32, pitch as f32);
-    }
-    if let Some([dx, dy]) = m.pan {
-        c = c.pan(dx as f32, dy as f32);
-    }
-    if let Some(d) = m.dolly {
-        c = c.dolly(d as f32);
-    }
-    c.validate().map_err(|e| format!("camera: {e}"))?;
-    Ok(c)
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-    use crate::protocol::{CameraMove, CameraPose};
-
-    #[test]
-    fn camera_moves_apply_in_order_and_a_degenerate_pose_is_refused() {
-        let base = crate::scene::Scene::builtin("bunny").unwrap().file.camera;
-        let turned = moved_camera(
-            base,
-            base,
-            &CameraMove {
-                orbit_deg: Some([30.0, 0.0]),
-                ..Default::default()
-            },
-        )
-        .unwrap();
-        assert_ne!(turned.eye, base.eye);
-        assert_eq!(turned.target, base.target);
-        let back = moved_camera(
-            base,
-            turned,
-            &CameraMove {
-                reset: true,
-                ..Default::default()
-            },
-        )
-        .unwrap();
-        assert_eq!(back, base);
-        let on_target = CameraMove {
-            pose: Some(CameraPose {
-                eye: [1.0, 2.0, 3.0],
-                target: [1.0, 2.0, 3.0],
-                up: None,
-            }),
-            ..Default::default()
-        };
-        assert!(moved_camera(base, turned, &on_target)
-            .unwrap_err()
-            .contains("coincide"));
-    }
 }
