@@ -3,7 +3,9 @@
 //! `fovea_sessions_refused_total`, `fovea_sessions_stalled_total`, `fovea_frames_rendered_total`,
 //! `fovea_frames_sent_total`, `fovea_frames_failed_total`, `fovea_frames_skipped_total` (a sample
 //! arrived while the client had no credit), `fovea_gaze_samples_total`, `fovea_gaze_coalesced_total`,
-//! `fovea_errors_total{code}`, and `fovea_stage_seconds{stage}` histograms for queue, render,
+//! `fovea_errors_total{code}`, `fovea_sessions_unauthorised_total`,
+//! `fovea_sessions_unresponsive_total`, `fovea_protocol_violations_total`,
+//! `fovea_frames_abandoned_total`, `fovea_draining`, and `fovea_stage_seconds{stage}` histograms for queue, render,
 //! readback, encode and send (queue only for frames that answer a gaze sample), and
 //! `fovea_gaze_to_sent_seconds` (a sample's arrival to its frame handed to the socket).
 //!
@@ -69,6 +71,22 @@ fn describe() {
             "fovea_frames_skipped_total",
             "Gaze samples whose frame was skipped: the client had no credit.",
         ),
+        (
+            "fovea_sessions_unauthorised_total",
+            "Handshakes refused for a missing or wrong token or a foreign Origin (401, 403).",
+        ),
+        (
+            "fovea_sessions_unresponsive_total",
+            "Sessions let go after three unanswered pings.",
+        ),
+        (
+            "fovea_protocol_violations_total",
+            "Sessions closed for breaking the WebSocket rules (1009, 1007, 1002).",
+        ),
+        (
+            "fovea_frames_abandoned_total",
+            "Frames not rendered because their session had gone.",
+        ),
         ("fovea_gaze_samples_total", "Gaze samples received."),
         (
             "fovea_gaze_coalesced_total",
@@ -86,6 +104,12 @@ fn describe() {
     );
     describe_gauge!("fovea_sessions_active", Unit::Count, "Sessions open now.");
     metrics::gauge!("fovea_sessions_active").set(0.0);
+    describe_gauge!(
+        "fovea_draining",
+        Unit::Count,
+        "1 once a drain has begun (SIGTERM, POST /admin/drain)."
+    );
+    metrics::gauge!("fovea_draining").set(0.0);
     describe_histogram!(
         "fovea_stage_seconds",
         Unit::Seconds,
