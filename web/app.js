@@ -23,6 +23,7 @@ const state = {
   totalFrames: 0,     // every session of this page
   connects: 0,
   moves: 0,           // sessions moved to another instance after a goodbye
+  moving: false,      // a goodbye came and no new session has said welcome yet
   pending: null,      // decoded frame waiting for the next animation frame
   drawScheduled: false,
   stats: new Stats(),
@@ -90,7 +91,9 @@ export function connect() {
     if (state.ws !== ws) return; // replaced on purpose
     state.ws = null;
     resetSession(); // the session is over: nothing of it may linger into the next
-    scheduleRetry(ev.code === 1013 ? 'server full' : `connection closed${ev.reason ? ` (${ev.reason})` : ''}`, ev.code === 1013);
+    const why = state.moving ? 'moving to another instance'
+      : `connection closed${ev.reason ? ` (${ev.reason})` : ''}`;
+    scheduleRetry(ev.code === 1013 ? 'server full' : why, ev.code === 1013);
   };
 }
 
@@ -115,6 +118,7 @@ function onText(text) {
   const msg = JSON.parse(text);
   if (msg.type === 'welcome') {
     attempt = 0;
+    state.moving = false;
     hideBanner();
     state.welcome = msg;
     setStatus(`live · session ${msg.session}`, 'live');
@@ -133,6 +137,7 @@ function onText(text) {
     // (the balancer picks another instance) after the delay it asked for.
     showBanner('server is being replaced: moving to another instance…', 'info', 4000);
     state.moves += 1;
+    state.moving = true; // until a session elsewhere says welcome
     clearTimeout(retryTimer);
     retryTimer = setTimeout(connect, msg.retry_ms);
   } else if (msg.type === 'error') {
