@@ -53,6 +53,10 @@ enum Command {
         /// replayable with `fovea replay`).
         #[arg(long)]
         record_dir: Option<PathBuf>,
+        /// A session's recording stops at this many MiB (its client is told; the session goes
+        /// on): ~25 bytes a sample, so 64 MiB is ~9 hours at 120 Hz.
+        #[arg(long, default_value_t = 64, value_parser = clap::value_parser!(u64).range(1..=16384))]
+        record_max_mb: u64,
         /// A folder of scenes to serve beside the built-in ones (repeatable): every scene file
         /// (.json) and glTF file (.gltf, .glb) at its top level, named by file stem. Files
         /// they refer to are read from inside the folder only.
@@ -194,6 +198,7 @@ fn main() -> Result<()> {
         Command::Serve {
             addr,
             record_dir,
+            record_max_mb,
             scenes,
             max_sessions,
             stall_timeout_s,
@@ -208,6 +213,7 @@ fn main() -> Result<()> {
                 addr,
                 fovea::server::ServerOptions {
                     record_dir,
+                    record_max_bytes: record_max_mb * 1024 * 1024,
                     max_sessions: max_sessions as usize,
                     stall_timeout: std::time::Duration::from_secs_f64(stall_timeout_s),
                     hello_timeout: std::time::Duration::from_secs_f64(hello_timeout_s),

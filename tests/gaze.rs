@@ -215,3 +215,60 @@ async fn a_live_recording_is_at_most_a_second_behind() {
     server.stop().await;
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// A recording that reaches its limit stops whole, the client is told once, and the session
+/// goes on with its frames.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn a_recording_at_its_limit_stops_and_the_session_goes_on() {
+    let dir = std::env::temp_dir().join(format!("fovea-cap-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    let (addr, server) = common::start(fovea::server::ServerOptions {
+        record_dir: Some(dir.clone()),
+        record_max_bytes: 200,
+        ..Default::default()
+    })
+    .await;
+    let url = format!("ws://{addr}/ws");
+    let mut c = fovea::client::Client::connect(&url).await.unwrap();
+    c.hello(&options(&url).hello).await.unwrap();
+    for seq in 1..=40u64 {
+        let g = fovea::protocol::Gaze {
+            seq,
+            t_ms: seq as f64,
+            x: 0.4,
+            y: 0.4,
+            pupil_mm: Some(4.0),
+        };
+        c.gaze(&g).await.unwrap();
+    }
+    let (mut stopped, mut last_seq) = (0, None);
+    while last_seq != Some(40) {
+        match c.next_event(Duration::from_secs(30)).await.unwrap() {
+            fovea::client::Event::Error(e) => {
+                assert_eq!(
+                    e.code,
+                    fovea::protocol::ErrorCode::RecordingStopped,
+                    "{e:?}"
+                );
+                stopped += 1;
+            }
+            fovea::client::Event::Frame { header, .. } => {
+                last_seq = header.seq;
+                let ack = fovea::protocol::Ack {
+                    frame: header.frame,
+                    t_ms: None,
+                    dropped: false,
+                };
+                c.ack(&ack).await.unwrap();
+            }
+            other => panic!("{other:?}"),
+        }
+    }
+    assert_eq!(stopped, 1, "told once");
+    drop(c);
+    server.stop().await;
+    let text = std::fs::read_to_string(common::run_folder(&dir).join("session-1.csv")).unwrap();
+    assert!(text.len() <= 200 && text.ends_with('\n'), "{text:?}");
+    assert!(text.lines().count() > 3, "{text:?}");
+    let _ = std::fs::remove_dir_all(&dir);
+}

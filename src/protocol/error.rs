@@ -35,6 +35,8 @@ pub enum ErrorCode {
     BadAck,
     /// The server failed to render or encode a frame; the session goes on.
     RenderFailed,
+    /// The session's recording reached its size limit and stopped; the session goes on.
+    RecordingStopped,
 }
 
 /// A rejected client message: the code for programs, the sentence for people.

@@ -60,6 +60,8 @@ pub struct ServerState {
     pub access: access::Access,
     /// This run's recording folder (inside `--record-dir`), if the server records.
     pub record_dir: Option<std::path::PathBuf>,
+    /// Largest recording file; a session's recording stops there.
+    pub record_max_bytes: u64,
     /// Each recording session's file, fetchable by its own client only.
     pub recordings: recordings::Recordings,
     /// One permit per session: admission control (a new client past the limit is refused
@@ -80,6 +82,8 @@ pub struct ServerState {
 pub struct ServerOptions {
     /// Record every session's received gaze samples to `run-…/session-<id>.csv` here.
     pub record_dir: Option<std::path::PathBuf>,
+    /// A session's recording stops (and its client is told) at this many bytes.
+    pub record_max_bytes: u64,
     /// Sessions served at once; more are refused with WebSocket close code 1013.
     pub max_sessions: usize,
     /// Disconnect a client with frames outstanding and no acknowledgement for this long.
@@ -99,6 +103,7 @@ impl Default for ServerOptions {
     fn default() -> Self {
         ServerOptions {
             record_dir: None,
+            record_max_bytes: 64 * 1024 * 1024,
             max_sessions: 16,
             stall_timeout: Duration::from_secs(10),
             ping_every: Duration::from_secs(10),
@@ -167,6 +172,7 @@ pub async fn run_with(
         sessions: TaskTracker::new(),
         access: options.access,
         record_dir,
+        record_max_bytes: options.record_max_bytes,
         recordings: Default::default(),
         slots: Arc::new(tokio::sync::Semaphore::new(options.max_sessions.max(1))),
         max_sessions: options.max_sessions.max(1),

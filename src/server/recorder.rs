@@ -21,14 +21,28 @@ pub struct Recorder {
     t0: Option<f64>,
     error: Option<std::io::Error>,
     flushed: std::time::Instant,
+    /// Bytes written so far, and the most the file may hold.
+    written: u64,
+    max_bytes: u64,
+}
+
+/// What a `write` did.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Wrote {
+    Row,
+    /// The row would pass the size limit: not written, and nothing more will be.
+    LimitReached,
+    /// The recording had already stopped (limit or write error).
+    Nothing,
 }
 
 impl Recorder {
-    pub fn create(dir: &Path, session: u64) -> std::io::Result<Recorder> {
+    pub fn create(dir: &Path, session: u64, max_bytes: u64) -> std::io::Result<Recorder> {
         let path = dir.join(format!("session-{session}.csv"));
         let partial = dir.join(format!("session-{session}.csv.partial"));
         let mut writer = BufWriter::new(File::create(&partial)?);
-        writer.write_all(b"t_ms,x,y,pupil_mm\n")?;
+        const HEADER: &[u8] = b"t_ms,x,y,pupil_mm\n";
+        writer.write_all(HEADER)?;
         // The header reaches the file at once: a download before the first second is never empty.
         writer.flush()?;
         Ok(Recorder {
@@ -38,6 +52,8 @@ impl Recorder {
             t0: None,
             error: None,
             flushed: std::time::Instant::now(),
+            written: HEADER.len() as u64,
+            max_bytes,
         })
     }
 
@@ -46,24 +62,29 @@ impl Recorder {
         (self.partial.clone(), self.path.clone())
     }
 
-    /// Appends one sample; the first write error is kept and reported by `finish`. Rows reach
-    /// the file at least once a second, so a download mid-session is at most a second behind.
-    pub fn write(&mut self, g: &Gaze) {
-        if self.error.is_some() {
-            return;
+    /// Appends one sample; the first write error is kept and reported by `finish`. A row that
+    /// would take the file past `max_bytes` stops the recording instead.
+    pub fn write(&mut self, g: &Gaze) -> Wrote {
+        if self.error.is_some() || self.written > self.max_bytes {
+            return Wrote::Nothing;
         }
         let t0 = *self.t0.get_or_insert(g.t_ms);
         let pupil = g.pupil_mm.map(|p| p.to_string()).unwrap_or_default();
-        if let Err(e) = writeln!(self.writer, "{},{},{},{}", g.t_ms - t0, g.x, g.y, pupil) {
+        let row = format!("{},{},{},{}\n", g.t_ms - t0, g.x, g.y, pupil);
+        if self.written + row.len() as u64 > self.max_bytes {
+            // Past the limit the file stays whole and stops; `written` marks it stopped.
+            self.written = self.max_bytes + 1;
+            return Wrote::LimitReached;
+        }
+        if let Err(e) = self.writer.write_all(row.as_bytes()) {
             self.error = Some(e);
-            return;
+            return Wrote::Nothing;
         }
+        self.written += row.len() as u64;
         if self.flushed.elapsed() >= std::time::Duration::from_secs(1) {
-            self.flushed = std::time::Instant::now();
-            if let Err(e) = self.writer.flush() {
-                self.error = Some(e);
-            }
+            self.flush();
         }
+        Wrote::Row
     }
 
     /// Writes out buffered rows (the session calls it every second, so rows reach the file
@@ -186,6 +207,32 @@ mod tests {
             run_folder_name(),
             "two runs never share a folder"
         );
+
+        // A recording stops whole at its limit.
+        let mut r = Recorder::create(&run, 9, 80).unwrap();
+        let g = |t: f64| Gaze {
+            seq: 1,
+            t_ms: t,
+            x: 0.25,
+            y: 0.5,
+            pupil_mm: Some(4.0),
+        };
+        let wrote: Vec<Wrote> = (0..6).map(|i| r.write(&g(f64::from(i)))).collect();
+        assert_eq!(
+            wrote,
+            [
+                Wrote::Row,
+                Wrote::Row,
+                Wrote::Row,
+                Wrote::Row,
+                Wrote::LimitReached,
+                Wrote::Nothing
+            ]
+        );
+        let text = std::fs::read_to_string(r.finish().unwrap()).unwrap();
+        assert!(text.len() <= 80 && text.ends_with('\n'), "{text:?}");
+        // 18 bytes of header and four 13-byte rows fit in 80; a fifth would not.
+        assert_eq!(text.lines().count(), 5, "{text:?}");
         let _ = std::fs::remove_dir_all(&dir);
     }
 }

@@ -171,7 +171,7 @@ fn send_all(conn: &Connection, replies: Vec<Outgoing>) -> Result<(), Gone> {
 impl Session {
     fn new(id: u64, state: Arc<ServerState>) -> Session {
         let recorder = state.record_dir.as_ref().and_then(|dir| {
-            Recorder::create(dir, id)
+            Recorder::create(dir, id, state.record_max_bytes)
                 .map_err(|e| {
                     tracing::warn!(session = id, "cannot record gaze to {}: {e}", dir.display())
                 })
@@ -222,8 +222,7 @@ impl Session {
                 if o.skipped {
                     ::metrics::counter!("fovea_frames_skipped_total").increment(1);
                 }
-                self.on_gaze(&gaze);
-                None
+                self.on_gaze(&gaze)
             }
             ClientMessage::Settings(patch) => match self.settings.apply(&patch) {
                 Ok(()) => {
@@ -267,16 +266,25 @@ impl Session {
         }
     }
 
-    fn on_gaze(&mut self, gaze: &Gaze) {
+    /// Keeps the sample for prediction and the recording; an error once the recording stops.
+    fn on_gaze(&mut self, gaze: &Gaze) -> Option<ServerMessage> {
         if gaze.pupil_mm.is_some() {
             self.pupil_mm = gaze.pupil_mm;
         }
         if let Some(p) = self.predictor.as_mut() {
             p.push(gaze.t_ms, [gaze.x, gaze.y]);
         }
-        if let Some(r) = self.recorder.as_mut() {
-            r.write(gaze);
-        }
+        let wrote = self.recorder.as_mut().map(|r| r.write(gaze));
+        (wrote == Some(super::recorder::Wrote::LimitReached)).then(|| {
+            let mb = self.state.record_max_bytes / (1024 * 1024);
+            tracing::info!(session = self.id, "recording stopped at its {mb} MiB limit");
+            error(
+                ErrorCode::RecordingStopped,
+                format!(
+                    "this session's recording reached {mb} MiB and stopped; the session goes on"
+                ),
+            )
+        })
     }
 
     fn on_hello(&mut self, hello: Hello, now: Instant) -> ServerMessage {
