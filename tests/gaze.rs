@@ -182,16 +182,7 @@ async fn a_live_recording_is_at_most_a_second_behind() {
     let (url, server) = server(Some(dir.clone())).await;
     let mut c = fovea::client::Client::connect(&url).await.unwrap();
     c.hello(&options(&url).hello).await.unwrap();
-    for seq in 1..=3u64 {
-        let g = fovea::protocol::Gaze {
-            seq,
-            t_ms: seq as f64,
-            x: 0.4,
-            y: 0.4,
-            pupil_mm: None,
-        };
-        c.gaze(&g).await.unwrap();
-    }
+    send_still_gaze(&mut c, 3, None).await;
     // The samples are in once a frame says so; then nothing more is sent.
     loop {
         match c.next_event(Duration::from_secs(30)).await.unwrap() {
@@ -231,16 +222,7 @@ async fn a_recording_at_its_limit_stops_and_the_session_goes_on() {
     let url = format!("ws://{addr}/ws");
     let mut c = fovea::client::Client::connect(&url).await.unwrap();
     c.hello(&options(&url).hello).await.unwrap();
-    for seq in 1..=40u64 {
-        let g = fovea::protocol::Gaze {
-            seq,
-            t_ms: seq as f64,
-            x: 0.4,
-            y: 0.4,
-            pupil_mm: Some(4.0),
-        };
-        c.gaze(&g).await.unwrap();
-    }
+    send_still_gaze(&mut c, 40, Some(4.0)).await;
     let (mut stopped, mut last_seq) = (0, None);
     while last_seq != Some(40) {
         match c.next_event(Duration::from_secs(30)).await.unwrap() {
@@ -271,4 +253,18 @@ async fn a_recording_at_its_limit_stops_and_the_session_goes_on() {
     assert!(text.len() <= 200 && text.ends_with('\n'), "{text:?}");
     assert!(text.lines().count() > 3, "{text:?}");
     let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// Sends samples 1..=n at one point, each with its own time.
+async fn send_still_gaze(c: &mut fovea::client::Client, n: u64, pupil_mm: Option<f64>) {
+    for seq in 1..=n {
+        let g = fovea::protocol::Gaze {
+            seq,
+            t_ms: seq as f64,
+            x: 0.4,
+            y: 0.4,
+            pupil_mm,
+        };
+        c.gaze(&g).await.unwrap();
+    }
 }

@@ -45,19 +45,12 @@ pub enum LinkEvent {
         connection: u32,
     },
     Error(ErrorMessage),
-    /// A new session is up; `gap_ms` is from the previous session's last frame to now.
-    Reconnected {
-        reason: String,
-        gap_ms: f64,
-    },
 }
 
 /// What happened over the link's life.
 #[derive(Debug, Default, Clone)]
 pub struct LinkStats {
     pub reconnects: u32,
-    /// Why each reconnect happened, in order.
-    pub reasons: Vec<String>,
     /// From the last frame of a session to the first of the next, per reconnect.
     pub gaps_ms: Vec<f64>,
     /// Messages the caller sent while no session was up (not delivered).
@@ -207,10 +200,7 @@ async fn pump(
         connection += 1;
         stats.reconnects += 1;
         gap_from = Some(last_frame);
-        let gap_ms = last_frame.elapsed().as_secs_f64() * 1e3;
         tracing::info!(connection, "reconnected after {reason}");
-        stats.reasons.push(reason.clone());
-        let _ = events.send(LinkEvent::Reconnected { reason, gap_ms });
     }
 }
 

@@ -253,7 +253,6 @@ async fn session(
                         errors += 1;
                         continue;
                     }
-                    LinkEvent::Reconnected { .. } => continue,
                 };
                 let now = session_start.elapsed().as_secs_f64() * 1e3;
                 frames += 1;
