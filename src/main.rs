@@ -2,7 +2,6 @@
 
 mod cli;
 
-use std::net::SocketAddr;
 use std::path::PathBuf;
 
 use anyhow::{bail, Context, Result};
@@ -45,45 +44,7 @@ enum Command {
     ///
     /// Logs go to stderr (RUST_LOG=fovea=debug for more); the first line on stdout is
     /// "fovea listening on http://ADDR/", with the real port when --addr asks for port 0.
-    Serve {
-        /// Address to listen on. Port 0 picks a free port.
-        #[arg(long, default_value = "127.0.0.1:8080")]
-        addr: SocketAddr,
-        /// Record every session's received gaze samples to DIR/run-…/session-<id>.csv (one folder per run; generic CSV,
-        /// replayable with `fovea replay`).
-        #[arg(long)]
-        record_dir: Option<PathBuf>,
-        /// A session's recording stops at this many MiB (its client is told; the session goes
-        /// on): ~25 bytes a sample, so 64 MiB is ~9 hours at 120 Hz.
-        #[arg(long, default_value_t = 64, value_parser = clap::value_parser!(u64).range(1..=16384))]
-        record_max_mb: u64,
-        /// A folder of scenes to serve beside the built-in ones (repeatable): every scene file
-        /// (.json) and glTF file (.gltf, .glb) at its top level, named by file stem. Files
-        /// they refer to are read from inside the folder only.
-        #[arg(long = "scenes", value_name = "DIR")]
-        scenes: Vec<PathBuf>,
-        /// Sessions served at once; more are refused (WebSocket close 1013, /readyz 503).
-        #[arg(long, default_value_t = 16, value_parser = clap::value_parser!(u64).range(1..=10000))]
-        max_sessions: u64,
-        /// Seconds a client may leave frames unacknowledged (or stop reading) before it is
-        /// disconnected.
-        #[arg(long, default_value_t = 10.0, value_parser = cli::parse::parse_seconds)]
-        stall_timeout_s: f64,
-        /// Seconds a new socket may take to say hello before it is closed (1008), so silent
-        /// sockets cannot hold session slots.
-        #[arg(long, default_value_t = 5.0, value_parser = cli::parse::parse_seconds)]
-        hello_timeout_s: f64,
-        /// Seconds between WebSocket pings to each client; one from which nothing, not even a
-        /// pong, has come for three is disconnected (half-open connections, dead peers).
-        #[arg(long, default_value_t = 10.0, value_parser = cli::parse::parse_seconds)]
-        ping_every_s: f64,
-        /// Seconds a drain (SIGTERM, POST /admin/drain) gives sessions to move to another
-        /// instance: they are sent `goodbye` at once and closed with 1001 when it ends.
-        #[arg(long, default_value_t = 10.0, value_parser = cli::parse::parse_seconds)]
-        drain_s: f64,
-        #[command(flatten)]
-        access: cli::access::AccessArgs,
-    },
+    Serve(cli::serve::ServeArgs),
     /// Render one frame to an image file, without a server.
     ///
     /// Quality knobs start from --preset; any knob flag then overrides that one knob. With
@@ -195,35 +156,7 @@ fn main() -> Result<()> {
         }
     }
     match cli.command {
-        Command::Serve {
-            addr,
-            record_dir,
-            record_max_mb,
-            scenes,
-            max_sessions,
-            stall_timeout_s,
-            hello_timeout_s,
-            ping_every_s,
-            drain_s,
-            access,
-        } => {
-            let (access, insecure) = access.resolve()?;
-            fovea::server::check_exposure(addr, &access, insecure).map_err(anyhow::Error::msg)?;
-            cli::serve::serve(
-                addr,
-                fovea::server::ServerOptions {
-                    record_dir,
-                    record_max_bytes: record_max_mb * 1024 * 1024,
-                    max_sessions: max_sessions as usize,
-                    stall_timeout: std::time::Duration::from_secs_f64(stall_timeout_s),
-                    hello_timeout: std::time::Duration::from_secs_f64(hello_timeout_s),
-                    ping_every: std::time::Duration::from_secs_f64(ping_every_s),
-                    catalog: fovea::scene::Catalog::with_folders(&scenes)?,
-                    drain: std::time::Duration::from_secs_f64(drain_s),
-                    access,
-                },
-            )
-        }
+        Command::Serve(args) => cli::serve::serve(args),
         Command::Bench(args) => bench(args),
         Command::Replay(args) => replay(args),
         Command::Gaze(args) => gaze(args),

@@ -2,6 +2,7 @@
 //! signals that start a drain.
 
 use std::net::SocketAddr;
+use std::path::PathBuf;
 
 use anyhow::{Context, Result};
 use fovea::render::{RenderThread, Renderer};
@@ -12,7 +13,82 @@ const DRIVER_HINT: &str = "Fovea needs a Vulkan (or Metal, DX12) adapter: instal
 driver (without a GPU: `apt-get install mesa-vulkan-drivers`, Mesa's lavapipe) and leave \
 WGPU_BACKEND unset or set to vulkan";
 
-pub fn serve(addr: SocketAddr, options: fovea::server::ServerOptions) -> Result<()> {
+#[derive(clap::Args)]
+pub struct ServeArgs {
+    /// Address to listen on. Port 0 picks a free port.
+    #[arg(long, default_value = "127.0.0.1:8080")]
+    pub addr: SocketAddr,
+    /// Record every session's received gaze samples to DIR/run-…/session-<id>.csv (one folder per run; generic CSV,
+    /// replayable with `fovea replay`).
+    #[arg(long)]
+    pub record_dir: Option<PathBuf>,
+    /// A session's recording stops at this many MiB (its client is told; the session goes
+    /// on): ~25 bytes a sample, so 64 MiB is ~9 hours at 120 Hz.
+    #[arg(long, default_value_t = 64, value_parser = clap::value_parser!(u64).range(1..=16384))]
+    pub record_max_mb: u64,
+    /// A folder of scenes to serve beside the built-in ones (repeatable): every scene file
+    /// (.json) and glTF file (.gltf, .glb) at its top level, named by file stem. Files
+    /// they refer to are read from inside the folder only.
+    #[arg(long = "scenes", value_name = "DIR")]
+    pub scenes: Vec<PathBuf>,
+    /// Sessions served at once; more are refused (WebSocket close 1013, /readyz 503).
+    #[arg(long, default_value_t = 16, value_parser = clap::value_parser!(u64).range(1..=10000))]
+    pub max_sessions: u64,
+    /// Seconds a client may leave frames unacknowledged (or stop reading) before it is
+    /// disconnected.
+    #[arg(long, default_value_t = 10.0, value_parser = super::parse::parse_seconds)]
+    pub stall_timeout_s: f64,
+    /// Seconds a new socket may take to say hello before it is closed (1008), so silent
+    /// sockets cannot hold session slots.
+    #[arg(long, default_value_t = 5.0, value_parser = super::parse::parse_seconds)]
+    pub hello_timeout_s: f64,
+    /// Seconds between WebSocket pings to each client; one from which nothing, not even a
+    /// pong, has come for three is disconnected (half-open connections, dead peers).
+    #[arg(long, default_value_t = 10.0, value_parser = super::parse::parse_seconds)]
+    pub ping_every_s: f64,
+    /// Seconds a drain (SIGTERM, POST /admin/drain) gives sessions to move to another
+    /// instance: they are sent `goodbye` at once and closed with 1001 when it ends.
+    #[arg(long, default_value_t = 10.0, value_parser = super::parse::parse_seconds)]
+    pub drain_s: f64,
+    #[command(flatten)]
+    pub access: super::access::AccessArgs,
+    /// Seconds a client may take to send a request's headers (the WebSocket upgrade's too);
+    /// an idle keep-alive connection is closed after it as well.
+    #[arg(long, default_value_t = 10.0, value_parser = super::parse::parse_seconds)]
+    pub header_timeout_s: f64,
+    /// HTTP connections open at once that are not (yet) sessions; at the cap new ones wait in
+    /// the kernel's backlog until one closes.
+    #[arg(long, default_value_t = 256, value_parser = clap::value_parser!(u64).range(1..=65536))]
+    pub max_pending: u64,
+}
+
+impl ServeArgs {
+    fn options(self) -> Result<fovea::server::ServerOptions> {
+        let (access, insecure) = self.access.resolve()?;
+        fovea::server::check_exposure(self.addr, &access, insecure).map_err(anyhow::Error::msg)?;
+        let secs = std::time::Duration::from_secs_f64;
+        Ok(fovea::server::ServerOptions {
+            record_dir: self.record_dir,
+            record_max_bytes: self.record_max_mb * 1024 * 1024,
+            max_sessions: self.max_sessions as usize,
+            stall_timeout: secs(self.stall_timeout_s),
+            hello_timeout: secs(self.hello_timeout_s),
+            ping_every: secs(self.ping_every_s),
+            catalog: fovea::scene::Catalog::with_folders(&self.scenes)?,
+            drain: secs(self.drain_s),
+            access,
+            connections: fovea::server::ConnectionLimits {
+                header_timeout: secs(self.header_timeout_s),
+                max_pending: self.max_pending as usize,
+            },
+        })
+    }
+}
+
+pub fn serve(args: ServeArgs) -> Result<()> {
+    let addr: SocketAddr = args.addr;
+    let mut options = args.options()?;
+    fit_descriptors(&mut options.connections, options.max_sessions);
     let mut renderer =
         Renderer::new().map_err(|e| anyhow::anyhow!("opening the GPU: {e}. {DRIVER_HINT}"))?;
     renderer.set_catalog(options.catalog.clone());
@@ -93,4 +169,41 @@ async fn stop_on_signal(shutdown: CancellationToken) {
     let _ = ctrl_c.await;
     tracing::info!("signal: draining (a second signal is not needed; the drain is bounded)");
     shutdown.cancel();
+}
+
+/// Keeps the pending-connection cap inside the process's file descriptors: the soft limit is
+/// raised to the hard one, and if pending connections, sessions (a socket and a recording
+/// each) and a reserve for the driver and files still do not fit, the cap is lowered (said once)
+/// so a flood of half-open connections cannot leave the server unable to accept or open files.
+fn fit_descriptors(limits: &mut fovea::server::ConnectionLimits, max_sessions: usize) {
+    const RESERVE: u64 = 64;
+    let mut lim = libc::rlimit {
+        rlim_cur: 0,
+        rlim_max: 0,
+    };
+    // SAFETY: getrlimit/setrlimit only read and write the struct we pass.
+    if unsafe { libc::getrlimit(libc::RLIMIT_NOFILE, &mut lim) } != 0 {
+        return;
+    }
+    if lim.rlim_cur < lim.rlim_max {
+        let raised = libc::rlimit {
+            rlim_cur: lim.rlim_max,
+            rlim_max: lim.rlim_max,
+        };
+        // SAFETY: as above.
+        if unsafe { libc::setrlimit(libc::RLIMIT_NOFILE, &raised) } == 0 {
+            lim = raised;
+        }
+    }
+    let fit = u64::from(lim.rlim_cur)
+        .saturating_sub(RESERVE + 2 * max_sessions as u64)
+        .max(8);
+    if (limits.max_pending as u64) > fit {
+        tracing::warn!(
+            "--max-pending {} lowered to {fit}: the process may open {} files (ulimit -n)",
+            limits.max_pending,
+            lim.rlim_cur
+        );
+        limits.max_pending = fit as usize;
+    }
 }

@@ -9,6 +9,7 @@ mod camera;
 mod connection;
 mod drain;
 mod frame_maker;
+mod listen;
 pub mod metrics;
 mod pacing;
 mod recorder;
@@ -28,6 +29,7 @@ use crate::protocol::{Limits, SceneInfo};
 use crate::render::RenderHandle;
 
 pub use app::router;
+pub use listen::ConnectionLimits;
 
 /// Hard cap on one WebSocket message; above `Limits::max_message_bytes` messages still get a
 /// polite `too_large` error, above this the transport closes the socket (code 1009).
@@ -97,6 +99,8 @@ pub struct ServerOptions {
     /// Grace period of a drain: sessions are told goodbye at once and closed (1001) after it.
     pub drain: Duration,
     pub access: access::Access,
+    /// Header deadline and cap on HTTP connections that are not sessions.
+    pub connections: ConnectionLimits,
 }
 
 impl Default for ServerOptions {
@@ -111,6 +115,7 @@ impl Default for ServerOptions {
             catalog: crate::scene::Catalog::builtin(),
             drain: Duration::from_secs(10),
             access: access::Access::default(),
+            connections: ConnectionLimits::default(),
         }
     }
 }
@@ -195,26 +200,16 @@ pub async fn run_with(
         });
     }
     let app = router(state.clone());
-    // Frames and gaze samples are small and latency-bound: Nagle's algorithm would hold them
-    // back for tens of milliseconds waiting for delayed ACKs.
-    let listener = axum::serve::ListenerExt::tap_io(listener, |tcp| {
-        if let Err(e) = tcp.set_nodelay(true) {
-            tracing::warn!("cannot set TCP_NODELAY: {e}");
-        }
-    });
     let stopped = CancellationToken::new();
     tokio::spawn(drain::run(state.clone(), stopped.clone()));
-    let serve =
-        axum::serve(listener, app).with_graceful_shutdown(stopped.clone().cancelled_owned());
-    // Graceful shutdown waits for every open HTTP connection; an idle keep-alive one (a proxy's
-    // pool) must not hold the exit past the drain.
-    tokio::select! {
-        served = serve => served?,
-        _ = async {
-            stopped.cancelled().await;
-            tokio::time::sleep(drain::CLOSE_WAIT).await;
-        } => tracing::debug!("idle connections left open at exit"),
-    }
+    listen::serve(
+        listener,
+        app,
+        options.connections,
+        stopped,
+        drain::CLOSE_WAIT,
+    )
+    .await?;
     Ok(())
 }
 
