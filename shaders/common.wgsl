@@ -49,6 +49,7 @@ struct Frame {
     rung: u32,
     pyramid_ready: u32,
     light_count: u32,
+    shade_rows: vec2<u32>,
     shadow_view_proj: mat4x4<f32>,
     shadow_params: vec4<f32>,
 }

@@ -232,8 +232,9 @@ fn shade_list(@builtin(global_invocation_id) id: vec3<u32>) {
 
 @compute @workgroup_size(8, 8)
 fn shade_grid(@builtin(global_invocation_id) id: vec3<u32>) {
-    let p = vec2<i32>(id.xy);
-    if (!in_frame(p)) {
+    // A slice's dispatch covers rows shade_rows.x.. (the whole frame when it is not sliced).
+    let p = vec2<i32>(id.xy + vec2<u32>(0u, frame.shade_rows.x));
+    if (!in_frame(p) || u32(p.y) >= frame.shade_rows.y) {
         return;
     }
     if (has_mode(MODE_FOVEATED) && (flags[index_of(p)] & FLAG_SAMPLED) == 0u) {

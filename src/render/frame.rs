@@ -66,11 +66,7 @@ impl FramePlan {
 
 /// Records the frame's passes into `f`'s encoder.
 pub fn record(f: &mut Recorder, plan: &FramePlan, mesh: &MeshBuffers) -> Result<(), GraphError> {
-    gbuffer::record(f, mesh)?;
-    if plan.screen_diffusion {
-        screen_diffusion::record(f)?;
-    }
-    f.route("frame.color", "shade.color");
+    record_prefix(f, plan, mesh)?;
     if plan.foveated {
         sampling::record(f)?;
         // The list also counts the samples (the header's `sampled`), so it is built even when
@@ -86,6 +82,27 @@ pub fn record(f: &mut Recorder, plan: &FramePlan, mesh: &MeshBuffers) -> Result<
     } else {
         shade::record_grid(f)?;
     }
+    record_suffix(f, plan)
+}
+
+/// What comes before shading: the G-buffer and, on the screen rung, its diffusion. A sliced
+/// frame (full shading only) records this, then `shade::record_rows` per slice, then
+/// [`record_suffix`], each in its own submission.
+pub fn record_prefix(
+    f: &mut Recorder,
+    plan: &FramePlan,
+    mesh: &MeshBuffers,
+) -> Result<(), GraphError> {
+    gbuffer::record(f, mesh)?;
+    if plan.screen_diffusion {
+        screen_diffusion::record(f)?;
+    }
+    f.route("frame.color", "shade.color");
+    Ok(())
+}
+
+/// What comes after shading: depth of field, the output image, and the next frame's history.
+pub fn record_suffix(f: &mut Recorder, plan: &FramePlan) -> Result<(), GraphError> {
     if plan.dof {
         dof::record(f)?;
     }

@@ -136,6 +136,7 @@ pub(super) fn frame_uniform(
         rung: s.translucency.rung.id(),
         pyramid_ready: u32::from(pyramid_ready),
         light_count: scene.file.lights.len() as u32,
+        shade_rows: [0, h],
         shadow_view_proj: shadow.view_proj.to_cols_array_2d(),
         shadow_params: shadow.params,
         ..FrameUniform::default()

@@ -21,8 +21,10 @@ pub mod lights;
 pub mod materials;
 pub mod pass;
 mod renderer;
+mod inspect;
 mod request;
 mod scene_gpu;
+mod sliced;
 mod targets;
 pub mod textures;
 mod thread;
@@ -31,6 +33,7 @@ pub mod uniforms;
 
 pub use device::Gpu;
 pub use renderer::Renderer;
+pub use sliced::{bands, FrameInFlight, Progress};
 pub use request::{FrameRequest, Inspection, RenderedFrame, DEFAULT_PUPIL_MM, MAX_SIDE, MIN_XI};
 pub use thread::{RenderHandle, RenderThread, Rendered};
 

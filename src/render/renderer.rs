@@ -2,19 +2,16 @@
 //! turns a [`FrameRequest`] into pixels. The frame's passes are recorded by `frame.rs`.
 
 use std::collections::HashMap;
-use std::time::Instant;
 
-use glam::Vec3;
 
-use super::frame::{self, FramePlan};
-use super::frame_uniform::frame_uniform;
 use super::gi::upload_radiosity;
-use super::graph::{Pipelines, Recorder, Resources};
-use super::pass::photons::{PhotonInputs, PhotonPass, SIDE as PHOTON_SIDE};
+use super::graph::{Pipelines, Resources};
+use super::pass::photons::{PhotonInputs, PhotonPass};
 use super::pass::shadow::shadow_view;
-use super::request::{FrameRequest, Inspection, RenderedFrame, MAX_SIDE};
+use super::request::{FrameRequest, RenderedFrame};
+use super::sliced::Progress;
 use super::scene_gpu::SceneGpu;
-use super::targets::{map_read, FrameTargets};
+use super::targets::FrameTargets;
 use super::timer::PassTimer;
 use super::{gpu, Gpu, RenderError};
 use crate::foveation::rank_map;
@@ -24,23 +21,25 @@ use crate::settings::Rung;
 /// Target sets (one per stream and size) kept alive; the oldest goes first.
 const TARGET_CACHE: usize = 8;
 
-type TargetKey = (u64, String, u32, u32);
+pub(super) type TargetKey = (u64, String, u32, u32);
 
 /// Owns the GPU and everything on it. Not shared: one thread drives it (see `RenderThread`).
 pub struct Renderer {
-    gpu: Gpu,
-    pipelines: Pipelines,
-    photon_pass: PhotonPass,
+    pub(super) gpu: Gpu,
+    pub(super) pipelines: Pipelines,
+    pub(super) photon_pass: PhotonPass,
     /// Shared by every stream: the blue-noise rank map.
-    shared: Resources,
-    scenes: HashMap<String, SceneGpu>,
-    targets: Vec<(TargetKey, FrameTargets)>,
-    timer: PassTimer,
-    pyramid_builds: u64,
+    pub(super) shared: Resources,
+    pub(super) scenes: HashMap<String, SceneGpu>,
+    pub(super) targets: Vec<(TargetKey, FrameTargets)>,
+    pub(super) timer: PassTimer,
+    pub(super) pyramid_builds: u64,
     /// The radiosity solves of loaded scenes, shared with `RenderHandle` for `/readyz`.
-    solves: Solves,
+    pub(super) solves: Solves,
     /// Where scenes come from by name.
-    catalog: crate::scene::Catalog,
+    pub(super) catalog: crate::scene::Catalog,
+    /// Targets of sliced frames in flight: never evicted under them.
+    pub(super) pinned: Vec<TargetKey>,
 }
 
 /// Radiosity solves the renderer's scenes use, readable from any thread.
@@ -91,6 +90,7 @@ impl Renderer {
             pyramid_builds: 0,
             solves: Solves::default(),
             catalog: crate::scene::Catalog::builtin(),
+            pinned: Vec::new(),
         }
     }
 
@@ -168,52 +168,26 @@ impl Renderer {
     /// Frees a stream's targets and history (a session ended).
     pub fn release_stream(&mut self, stream: u64) {
         self.targets.retain(|(k, _)| k.0 != stream);
+        self.pinned.retain(|k| k.0 != stream);
     }
 
+    /// Renders a whole frame in one submission.
     pub fn render(&mut self, req: &FrameRequest) -> Result<RenderedFrame, RenderError> {
-        let (w, h) = (req.width, req.height);
-        if w == 0 || h == 0 || w > MAX_SIDE || h > MAX_SIDE {
-            return Err(RenderError::Size {
-                width: w,
-                height: h,
-                max: MAX_SIDE,
-            });
-        }
-        self.load_scene(&req.scene)?;
-        let started = Instant::now();
-        let ti = self.target_index(req.stream, &req.scene, w, h)?;
-        self.timer.begin_frame();
-        let (photon_encoder, inputs) = self.prepare_scene(req, ti)?;
-        let submission = self.encode_frame(req, ti, inputs, photon_encoder)?;
-        let render_ms = started.elapsed().as_secs_f64() * 1e3;
-        let device = &self.gpu.device;
-        let passes_ms = self.timer.read(device, submission)?;
-
-        let started = Instant::now();
-        let t = &self.targets[ti].1;
-        let (rgba, count) = t.read_back(device, &self.gpu.queue)?;
-        let readback_ms = started.elapsed().as_secs_f64() * 1e3;
-        let sampled = if req.settings.foveation.enabled {
-            f64::from(count) / (f64::from(w) * f64::from(h))
-        } else {
-            1.0
+        let mut going = match self.begin(req, 1)? {
+            Progress::Done(frame) => return Ok(frame),
+            Progress::Going(going) => going,
         };
-        Ok(RenderedFrame {
-            width: w,
-            height: h,
-            rgba,
-            sampled,
-            render_ms,
-            readback_ms,
-            passes_ms,
-            radiosity: self.scenes.get(&req.scene).and_then(|s| s.gi),
-        })
+        loop {
+            if let Some(frame) = self.step(&mut going)? {
+                return Ok(frame);
+            }
+        }
     }
 
     /// Uploads radiosity's newest snapshot and, when the hierarchical rungs will read a photon
     /// pyramid that is stale, records its rebuild. Returns that encoder and what the pyramid
     /// must be built for (light direction, radiosity snapshot).
-    fn prepare_scene(
+    pub(super) fn prepare_scene(
         &mut self,
         req: &FrameRequest,
         ti: usize,
@@ -282,130 +256,7 @@ impl Renderer {
         Ok((enc.map(wgpu::CommandEncoder::finish), inputs))
     }
 
-    /// Writes the frame's uniforms, records its passes, submits and waits for them.
-    fn encode_frame(
-        &mut self,
-        req: &FrameRequest,
-        ti: usize,
-        inputs: PhotonInputs,
-        photon_encoder: Option<wgpu::CommandBuffer>,
-    ) -> Result<wgpu::SubmissionIndex, RenderError> {
-        let sg = self
-            .scenes
-            .get(&req.scene)
-            .ok_or_else(|| RenderError::Gpu(format!("scene {} is not loaded", req.scene)))?;
-        let pyramid_ready = sg
-            .photons
-            .as_ref()
-            .is_some_and(|m| m.built_for == Some(inputs));
-        let shadow_ready = sg
-            .shadow
-            .as_ref()
-            .is_some_and(|m| m.built_for == Some(inputs.to_light));
-        let (device, queue) = (&self.gpu.device, &self.gpu.queue);
-        let t = &mut self.targets[ti].1;
-        let camera = req.camera.unwrap_or(sg.scene.file.camera);
-        let uniform = frame_uniform(
-            &sg.scene,
-            &camera,
-            req,
-            t,
-            inputs.to_light,
-            pyramid_ready,
-            shadow_ready,
-        );
-        queue.write_buffer(t.buffer("frame.uniform")?, 0, bytemuck::bytes_of(&uniform));
-        let plan = FramePlan::of(&req.settings, req.width, req.height, t.needs_dipole);
-
-        let scope = device.push_error_scope(wgpu::ErrorFilter::Validation);
-        let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
-            label: Some("frame"),
-        });
-        let mut recorder = Recorder {
-            device,
-            queue,
-            encoder: &mut encoder,
-            pipelines: &mut self.pipelines,
-            resources: &t.resources,
-            binds: &mut t.binds,
-            routes: Default::default(),
-            timer: &mut self.timer,
-            size: (req.width, req.height),
-        };
-        frame::record(&mut recorder, &plan, &sg.mesh)?;
-        t.routes = recorder.routes;
-        self.timer.resolve(&mut encoder);
-        let submission = queue.submit(photon_encoder.into_iter().chain([encoder.finish()]));
-        device
-            .poll(wgpu::PollType::Wait {
-                submission_index: Some(submission.clone()),
-                timeout: None,
-            })
-            .map_err(|e| RenderError::Gpu(format!("waiting for the frame: {e}")))?;
-        if let Some(e) = pollster::block_on(scope.pop()) {
-            return Err(RenderError::Gpu(e.to_string()));
-        }
-        t.prev_view_proj = camera.view_proj(req.width, req.height);
-        t.prev_eye = Vec3::from(camera.eye);
-        t.has_history = true;
-        t.frame_index = t.frame_index.wrapping_add(1);
-        Ok(submission)
-    }
-
-    /// Reads back the intermediate images of a stream's last frame.
-    pub fn inspect(
-        &self,
-        stream: u64,
-        scene: &str,
-        width: u32,
-        height: u32,
-    ) -> Result<Inspection, RenderError> {
-        let key = (stream, scene.to_string(), width, height);
-        let (_, t) = self
-            .targets
-            .iter()
-            .find(|(k, _)| *k == key)
-            .ok_or_else(|| {
-                RenderError::Readback(format!(
-                    "no frame rendered for stream {stream} at {width}x{height}"
-                ))
-            })?;
-        let buf = |name| read_buffer(&self.gpu, t.buffer(name)?);
-        let f32s = |b: Vec<u8>| -> Vec<f32> { bytemuck::pod_collect_to_vec(&b) };
-        let u32s = |b: Vec<u8>| -> Vec<u32> { bytemuck::pod_collect_to_vec(&b) };
-        let quads = |b: Vec<u8>| -> Vec<[f32; 4]> { bytemuck::pod_collect_to_vec(&b) };
-        let nodes = self
-            .scenes
-            .get(scene)
-            .and_then(|s| s.photons.as_ref())
-            .and_then(|m| m.nodes());
-        Ok(Inspection {
-            probability: f32s(buf("sampling.probability")?),
-            flags: u32s(buf("sampling.flags")?),
-            seeds: u32s(buf("sampling.seeds")?),
-            nearest: u32s(
-                buf(t.routes.resolve("jfa.nearest")).or_else(|_| buf("jfa.seeds[ping]"))?,
-            ),
-            color: quads(buf("shade.color")?),
-            resolved: quads(buf("resolve.color")?),
-            normal_distance: quads(read_texture(
-                &self.gpu,
-                t.texture("gbuffer.normal_distance")?,
-                16,
-            )?),
-            photons: match nodes {
-                Some(nodes) => {
-                    let n = (PHOTON_SIDE * PHOTON_SIDE) as usize;
-                    let all: Vec<[f32; 8]> =
-                        bytemuck::pod_collect_to_vec(&read_buffer(&self.gpu, nodes)?);
-                    all[..n.min(all.len())].to_vec()
-                }
-                None => Vec::new(),
-            },
-        })
-    }
-
-    fn target_index(
+    pub(super) fn target_index(
         &mut self,
         stream: u64,
         scene: &str,
@@ -416,8 +267,15 @@ impl Renderer {
         if let Some(i) = self.targets.iter().position(|(k, _)| *k == key) {
             return Ok(i);
         }
+        // The oldest set goes first, unless a sliced frame is still using it.
         if self.targets.len() >= TARGET_CACHE {
-            self.targets.remove(0);
+            if let Some(i) = self
+                .targets
+                .iter()
+                .position(|(k, _)| !self.pinned.contains(k))
+            {
+                self.targets.remove(i);
+            }
         }
         let sg = self
             .scenes
@@ -435,58 +293,4 @@ impl Renderer {
         self.targets.push((key, t));
         Ok(self.targets.len() - 1)
     }
-}
-
-fn read_buffer(gpu: &Gpu, source: &wgpu::Buffer) -> Result<Vec<u8>, RenderError> {
-    let buffer = gpu.device.create_buffer(&wgpu::BufferDescriptor {
-        label: Some("inspect"),
-        size: source.size(),
-        usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
-        mapped_at_creation: false,
-    });
-    let mut encoder = gpu.device.create_command_encoder(&Default::default());
-    encoder.copy_buffer_to_buffer(source, 0, &buffer, 0, source.size());
-    let submission = gpu.queue.submit([encoder.finish()]);
-    map_read(&gpu.device, submission, &buffer, |bytes| bytes.to_vec())
-}
-
-fn read_texture(
-    gpu: &Gpu,
-    texture: &wgpu::Texture,
-    bytes_per_pixel: u32,
-) -> Result<Vec<u8>, RenderError> {
-    let (w, h) = (texture.width(), texture.height());
-    let align = wgpu::COPY_BYTES_PER_ROW_ALIGNMENT;
-    let row = w * bytes_per_pixel;
-    let padded = row.div_ceil(align) * align;
-    let buffer = gpu.device.create_buffer(&wgpu::BufferDescriptor {
-        label: Some("inspect"),
-        size: u64::from(padded) * u64::from(h),
-        usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
-        mapped_at_creation: false,
-    });
-    let mut encoder = gpu.device.create_command_encoder(&Default::default());
-    encoder.copy_texture_to_buffer(
-        texture.as_image_copy(),
-        wgpu::TexelCopyBufferInfo {
-            buffer: &buffer,
-            layout: wgpu::TexelCopyBufferLayout {
-                offset: 0,
-                bytes_per_row: Some(padded),
-                rows_per_image: Some(h),
-            },
-        },
-        wgpu::Extent3d {
-            width: w,
-            height: h,
-            depth_or_array_layers: 1,
-        },
-    );
-    let submission = gpu.queue.submit([encoder.finish()]);
-    map_read(&gpu.device, submission, &buffer, |bytes| {
-        bytes
-            .chunks_exact(padded as usize)
-            .flat_map(|c| c[..row as usize].to_vec())
-            .collect()
-    })
 }

@@ -175,8 +175,9 @@ frame_uniform! {
     pyramid_ready: u32,
     /// How many entries of `lights.scene` (extra punctual lights) shade this frame.
     light_count: u32,
-    _pad0: u32,
-    _pad1: u32,
+    /// Rows [first, end) the shading grid covers: the whole frame, or one slice of a frame
+    /// split so other sessions' frames can run between its slices.
+    shade_rows: [u32; 2],
     /// World → the key light's shadow map (x, y in NDC, z in 0..1).
     shadow_view_proj: [[f32; 4]; 4],
     /// x: depth bias (shadow-map depth units); y: normal offset (scene units); z: 1 when the

@@ -1,0 +1,116 @@
+//! Reading a stream's intermediate images back for tests and diagnostics.
+
+use super::pass::photons::SIDE as PHOTON_SIDE;
+use super::renderer::Renderer;
+use super::request::Inspection;
+use super::targets::map_read;
+use super::{Gpu, RenderError};
+
+impl Renderer {
+    /// Reads back the intermediate images of a stream's last frame.
+    pub fn inspect(
+        &self,
+        stream: u64,
+        scene: &str,
+        width: u32,
+        height: u32,
+    ) -> Result<Inspection, RenderError> {
+        let key = (stream, scene.to_string(), width, height);
+        let (_, t) = self
+            .targets
+            .iter()
+            .find(|(k, _)| *k == key)
+            .ok_or_else(|| {
+                RenderError::Readback(format!(
+                    "no frame rendered for stream {stream} at {width}x{height}"
+                ))
+            })?;
+        let buf = |name| read_buffer(&self.gpu, t.buffer(name)?);
+        let f32s = |b: Vec<u8>| -> Vec<f32> { bytemuck::pod_collect_to_vec(&b) };
+        let u32s = |b: Vec<u8>| -> Vec<u32> { bytemuck::pod_collect_to_vec(&b) };
+        let quads = |b: Vec<u8>| -> Vec<[f32; 4]> { bytemuck::pod_collect_to_vec(&b) };
+        let nodes = self
+            .scenes
+            .get(scene)
+            .and_then(|s| s.photons.as_ref())
+            .and_then(|m| m.nodes());
+        Ok(Inspection {
+            probability: f32s(buf("sampling.probability")?),
+            flags: u32s(buf("sampling.flags")?),
+            seeds: u32s(buf("sampling.seeds")?),
+            nearest: u32s(
+                buf(t.routes.resolve("jfa.nearest")).or_else(|_| buf("jfa.seeds[ping]"))?,
+            ),
+            color: quads(buf("shade.color")?),
+            resolved: quads(buf("resolve.color")?),
+            normal_distance: quads(read_texture(
+                &self.gpu,
+                t.texture("gbuffer.normal_distance")?,
+                16,
+            )?),
+            photons: match nodes {
+                Some(nodes) => {
+                    let n = (PHOTON_SIDE * PHOTON_SIDE) as usize;
+                    let all: Vec<[f32; 8]> =
+                        bytemuck::pod_collect_to_vec(&read_buffer(&self.gpu, nodes)?);
+                    all[..n.min(all.len())].to_vec()
+                }
+                None => Vec::new(),
+            },
+        })
+    }
+}
+
+fn read_buffer(gpu: &Gpu, source: &wgpu::Buffer) -> Result<Vec<u8>, RenderError> {
+    let buffer = gpu.device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some("inspect"),
+        size: source.size(),
+        usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
+        mapped_at_creation: false,
+    });
+    let mut encoder = gpu.device.create_command_encoder(&Default::default());
+    encoder.copy_buffer_to_buffer(source, 0, &buffer, 0, source.size());
+    let submission = gpu.queue.submit([encoder.finish()]);
+    map_read(&gpu.device, submission, &buffer, |bytes| bytes.to_vec())
+}
+
+fn read_texture(
+    gpu: &Gpu,
+    texture: &wgpu::Texture,
+    bytes_per_pixel: u32,
+) -> Result<Vec<u8>, RenderError> {
+    let (w, h) = (texture.width(), texture.height());
+    let align = wgpu::COPY_BYTES_PER_ROW_ALIGNMENT;
+    let row = w * bytes_per_pixel;
+    let padded = row.div_ceil(align) * align;
+    let buffer = gpu.device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some("inspect"),
+        size: u64::from(padded) * u64::from(h),
+        usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
+        mapped_at_creation: false,
+    });
+    let mut encoder = gpu.device.create_command_encoder(&Default::default());
+    encoder.copy_texture_to_buffer(
+        texture.as_image_copy(),
+        wgpu::TexelCopyBufferInfo {
+            buffer: &buffer,
+            layout: wgpu::TexelCopyBufferLayout {
+                offset: 0,
+                bytes_per_row: Some(padded),
+                rows_per_image: Some(h),
+            },
+        },
+        wgpu::Extent3d {
+            width: w,
+            height: h,
+            depth_or_array_layers: 1,
+        },
+    );
+    let submission = gpu.queue.submit([encoder.finish()]);
+    map_read(&gpu.device, submission, &buffer, |bytes| {
+        bytes
+            .chunks_exact(padded as usize)
+            .flat_map(|c| c[..row as usize].to_vec())
+            .collect()
+    })
+}

@@ -1,0 +1,320 @@
+//! Frames in parts. A frame that shades every pixel with costly shading (the reference rung at
+//! 4K runs for many seconds on a software adapter) is split into submissions: the passes before
+//! shading, the shading in bands of rows, and the passes after it. The render thread runs other
+//! sessions' frames between the parts, so one heavy frame delays them by at most one part.
+//! Foveated frames shade a compacted list (cost ∝ samples) and stay whole.
+//!
+//! What a frame in flight owns lives in its stream's targets (pinned until it ends); what it
+//! shares with other frames of its scene (shadow map, photon pyramid) must not be rebuilt for
+//! another light meanwhile: [`Renderer::conflicts`] says when a frame would.
+
+use std::collections::BTreeMap;
+use std::time::Instant;
+
+use glam::Vec3;
+
+use super::frame::{self, FramePlan};
+use super::frame_uniform::frame_uniform;
+use super::graph::Recorder;
+use super::pass::photons::PhotonInputs;
+use super::pass::shade;
+use super::renderer::{Renderer, TargetKey};
+use super::request::{FrameRequest, RenderedFrame, MAX_SIDE};
+use super::uniforms::FIELDS;
+use super::RenderError;
+
+/// Where a frame stands after [`Renderer::begin`] or [`Renderer::step`].
+pub enum Progress {
+    Done(RenderedFrame),
+    Going(FrameInFlight),
+}
+
+/// A sliced frame between its parts.
+pub struct FrameInFlight {
+    req: FrameRequest,
+    key: TargetKey,
+    /// The bands of rows still to shade, next first.
+    bands: Vec<(u32, u32)>,
+    to_light: Vec3,
+    render_ms: f64,
+    passes_ms: BTreeMap<String, f64>,
+}
+
+impl FrameInFlight {
+    pub fn stream(&self) -> u64 {
+        self.req.stream
+    }
+}
+
+/// One submission of a frame.
+#[derive(Clone, Copy)]
+enum Part {
+    Whole,
+    Prefix,
+    Rows(u32, u32),
+    Suffix,
+}
+
+/// Splits `height` rows into `slices` bands of whole 8-row workgroups.
+pub fn bands(height: u32, slices: u32) -> Vec<(u32, u32)> {
+    let groups = height.div_ceil(8);
+    let n = slices.clamp(1, groups.max(1));
+    (0..n)
+        .map(|i| {
+            let first = (groups * i / n) * 8;
+            let end = ((groups * (i + 1) / n) * 8).min(height);
+            (first, end)
+        })
+        .filter(|(a, b)| b > a)
+        .collect()
+}
+
+impl Renderer {
+    /// Starts a frame: whole when `slices` is 1 or the frame is foveated, else the passes before
+    /// shading, leaving `slices` bands of shading and the rest to [`Renderer::step`].
+    pub fn begin(&mut self, req: &FrameRequest, slices: u32) -> Result<Progress, RenderError> {
+        let (w, h) = (req.width, req.height);
+        if w == 0 || h == 0 || w > MAX_SIDE || h > MAX_SIDE {
+            return Err(RenderError::Size {
+                width: w,
+                height: h,
+                max: MAX_SIDE,
+            });
+        }
+        self.load_scene(&req.scene)?;
+        let started = Instant::now();
+        let key: TargetKey = (req.stream, req.scene.clone(), w, h);
+        let ti = self.target_index(req.stream, &req.scene, w, h)?;
+        self.timer.begin_frame();
+        let (photon_encoder, inputs) = self.prepare_scene(req, ti)?;
+        self.write_uniform(req, ti, inputs)?;
+        let sliced = slices > 1 && !req.settings.foveation.enabled;
+        let part = if sliced { Part::Prefix } else { Part::Whole };
+        let submission = self.submit(req, ti, part, photon_encoder)?;
+        let render_ms = started.elapsed().as_secs_f64() * 1e3;
+        let passes_ms = self.timer.read(&self.gpu.device, submission)?;
+        let going = FrameInFlight {
+            req: req.clone(),
+            key: key.clone(),
+            bands: if sliced { bands(h, slices) } else { Vec::new() },
+            to_light: inputs.to_light,
+            render_ms,
+            passes_ms,
+        };
+        if sliced {
+            self.pinned.push(key);
+            return Ok(Progress::Going(going));
+        }
+        self.finish(going, ti).map(Progress::Done)
+    }
+
+    /// Runs a sliced frame's next part; the last one returns the frame.
+    pub fn step(&mut self, f: &mut FrameInFlight) -> Result<Option<RenderedFrame>, RenderError> {
+        let Some(ti) = self.targets.iter().position(|(k, _)| *k == f.key) else {
+            return Err(RenderError::Gpu(format!(
+                "stream {}'s targets were released mid-frame",
+                f.req.stream
+            )));
+        };
+        let started = Instant::now();
+        self.timer.begin_frame();
+        let part = match f.bands.first().copied() {
+            Some((a, b)) => {
+                f.bands.remove(0);
+                Part::Rows(a, b)
+            }
+            None => Part::Suffix,
+        };
+        let submission = self.submit(&f.req, ti, part, None)?;
+        for (pass, ms) in self.timer.read(&self.gpu.device, submission)? {
+            *f.passes_ms.entry(pass).or_default() += ms;
+        }
+        f.render_ms += started.elapsed().as_secs_f64() * 1e3;
+        if !matches!(part, Part::Suffix) {
+            return Ok(None);
+        }
+        let key = f.key.clone();
+        self.pinned.retain(|k| *k != key);
+        let done = FrameInFlight {
+            req: f.req.clone(),
+            key,
+            bands: Vec::new(),
+            to_light: f.to_light,
+            render_ms: f.render_ms,
+            passes_ms: std::mem::take(&mut f.passes_ms),
+        };
+        self.finish(done, ti).map(Some)
+    }
+
+    /// Lets go of a sliced frame nobody wants any more (its session left).
+    pub fn abandon(&mut self, f: FrameInFlight) {
+        self.pinned.retain(|k| *k != f.key);
+    }
+
+    /// Whether running `req` now would change what the sliced frame `f` reads from its scene:
+    /// the shadow map and photon pyramid are built for one light direction at a time.
+    pub fn conflicts(&self, req: &FrameRequest, f: &FrameInFlight) -> bool {
+        if req.scene != f.req.scene {
+            return false;
+        }
+        let Some(sg) = self.scenes.get(&req.scene) else {
+            return false;
+        };
+        let to_light = req
+            .to_light
+            .and_then(|l| l.try_normalize())
+            .unwrap_or_else(|| sg.scene.file.light.to_light_at(req.time_s));
+        to_light != f.to_light
+    }
+
+    fn write_uniform(
+        &mut self,
+        req: &FrameRequest,
+        ti: usize,
+        inputs: PhotonInputs,
+    ) -> Result<(), RenderError> {
+        let sg = self
+            .scenes
+            .get(&req.scene)
+            .ok_or_else(|| RenderError::Gpu(format!("scene {} is not loaded", req.scene)))?;
+        let pyramid_ready = sg
+            .photons
+            .as_ref()
+            .is_some_and(|m| m.built_for == Some(inputs));
+        let shadow_ready = sg
+            .shadow
+            .as_ref()
+            .is_some_and(|m| m.built_for == Some(inputs.to_light));
+        let t = &self.targets[ti].1;
+        let camera = req.camera.unwrap_or(sg.scene.file.camera);
+        let uniform = frame_uniform(
+            &sg.scene,
+            &camera,
+            req,
+            t,
+            inputs.to_light,
+            pyramid_ready,
+            shadow_ready,
+        );
+        let buffer = t.buffer("frame.uniform")?;
+        self.gpu
+            .queue
+            .write_buffer(buffer, 0, bytemuck::bytes_of(&uniform));
+        Ok(())
+    }
+
+    /// Records one part, submits it and waits for it.
+    fn submit(
+        &mut self,
+        req: &FrameRequest,
+        ti: usize,
+        part: Part,
+        photon_encoder: Option<wgpu::CommandBuffer>,
+    ) -> Result<wgpu::SubmissionIndex, RenderError> {
+        let sg = self
+            .scenes
+            .get(&req.scene)
+            .ok_or_else(|| RenderError::Gpu(format!("scene {} is not loaded", req.scene)))?;
+        let (device, queue) = (&self.gpu.device, &self.gpu.queue);
+        let t = &mut self.targets[ti].1;
+        if let Part::Rows(a, b) = part {
+            let offset = FIELDS
+                .iter()
+                .find(|(name, _)| *name == "shade_rows")
+                .map_or(0, |(_, o)| *o as u64);
+            let buffer = t.buffer("frame.uniform")?;
+            queue.write_buffer(buffer, offset, bytemuck::cast_slice(&[a, b]));
+        }
+        let plan = FramePlan::of(&req.settings, req.width, req.height, t.needs_dipole);
+        let scope = device.push_error_scope(wgpu::ErrorFilter::Validation);
+        let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
+            label: Some("frame"),
+        });
+        let mut recorder = Recorder {
+            device,
+            queue,
+            encoder: &mut encoder,
+            pipelines: &mut self.pipelines,
+            resources: &t.resources,
+            binds: &mut t.binds,
+            // Later parts read the ports the first part set (`frame.color`).
+            routes: match part {
+                Part::Whole | Part::Prefix => Default::default(),
+                Part::Rows(..) | Part::Suffix => t.routes.clone(),
+            },
+            timer: &mut self.timer,
+            size: (req.width, req.height),
+        };
+        match part {
+            Part::Whole => frame::record(&mut recorder, &plan, &sg.mesh)?,
+            Part::Prefix => frame::record_prefix(&mut recorder, &plan, &sg.mesh)?,
+            Part::Rows(a, b) => shade::record_rows(&mut recorder, a, b)?,
+            Part::Suffix => frame::record_suffix(&mut recorder, &plan)?,
+        }
+        t.routes = recorder.routes;
+        self.timer.resolve(&mut encoder);
+        let submission = queue.submit(photon_encoder.into_iter().chain([encoder.finish()]));
+        device
+            .poll(wgpu::PollType::Wait {
+                submission_index: Some(submission.clone()),
+                timeout: None,
+            })
+            .map_err(|e| RenderError::Gpu(format!("waiting for the frame: {e}")))?;
+        if let Some(e) = pollster::block_on(scope.pop()) {
+            return Err(RenderError::Gpu(e.to_string()));
+        }
+        if matches!(part, Part::Whole | Part::Suffix) {
+            let camera = req.camera.unwrap_or(sg.scene.file.camera);
+            t.prev_view_proj = camera.view_proj(req.width, req.height);
+            t.prev_eye = Vec3::from(camera.eye);
+            t.has_history = true;
+            t.frame_index = t.frame_index.wrapping_add(1);
+        }
+        Ok(submission)
+    }
+
+    /// Reads the finished frame back.
+    fn finish(&mut self, f: FrameInFlight, ti: usize) -> Result<RenderedFrame, RenderError> {
+        let (w, h) = (f.req.width, f.req.height);
+        let started = Instant::now();
+        let t = &self.targets[ti].1;
+        let (rgba, count) = t.read_back(&self.gpu.device, &self.gpu.queue)?;
+        let readback_ms = started.elapsed().as_secs_f64() * 1e3;
+        let sampled = if f.req.settings.foveation.enabled {
+            f64::from(count) / (f64::from(w) * f64::from(h))
+        } else {
+            1.0
+        };
+        Ok(RenderedFrame {
+            width: w,
+            height: h,
+            rgba,
+            sampled,
+            render_ms: f.render_ms,
+            readback_ms,
+            passes_ms: f.passes_ms,
+            radiosity: self.scenes.get(&f.req.scene).and_then(|s| s.gi),
+        })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::bands;
+
+    #[test]
+    fn bands_cover_every_row_once_in_whole_workgroups() {
+        for (h, n) in [(2160, 40), (480, 3), (7, 5), (8, 1), (1, 100), (2161, 7)] {
+            let b = bands(h, n);
+            assert_eq!(b.first().map(|x| x.0), Some(0), "{h} {n}");
+            assert_eq!(b.last().map(|x| x.1), Some(h), "{h} {n}");
+            for w in b.windows(2) {
+                assert_eq!(w[0].1, w[1].0, "bands touch: {h} {n}");
+            }
+            for (a, e) in &b {
+                assert!(e > a && a % 8 == 0, "{h} {n}: {a}..{e}");
+            }
+            assert!(b.len() as u32 <= n.max(1));
+        }
+    }
+}

@@ -1,0 +1,76 @@
+//! A frame split into parts (shading in bands of rows, other frames in between) gives the same
+//! pixels as the frame rendered whole.
+
+use fovea::render::{FrameRequest, Progress, Renderer};
+use fovea::settings::{Preset, RenderSettings};
+
+fn request(preset: Preset, stream: u64) -> FrameRequest {
+    FrameRequest {
+        settings: RenderSettings::of(preset),
+        stream,
+        ..FrameRequest::new("gallery", 200, 150)
+    }
+}
+
+fn renderer() -> Renderer {
+    Renderer::new().unwrap_or_else(|e| panic!("GPU tests need an adapter: {e}"))
+}
+
+/// Largest difference of any channel between two images.
+fn max_diff(a: &[u8], b: &[u8]) -> u8 {
+    assert_eq!(a.len(), b.len());
+    a.iter().zip(b).map(|(x, y)| x.abs_diff(*y)).max().unwrap_or(0)
+}
+
+#[test]
+fn a_sliced_frame_with_others_between_its_parts_equals_the_whole_frame() {
+    let mut r = renderer();
+    for preset in [Preset::Full, Preset::Reference] {
+        let whole = r.render(&request(preset, 1)).unwrap();
+        let mut going = match r.begin(&request(preset, 2), 5).unwrap() {
+            Progress::Going(g) => g,
+            Progress::Done(_) => panic!("{preset}: a full-shading frame asked for 5 slices is sliced"),
+        };
+        let mut parts = 1;
+        let sliced = loop {
+            // Another stream's foveated frame of the same scene runs between every part.
+            let other = r.render(&request(Preset::Balanced, 3)).unwrap();
+            assert!(other.sampled < 1.0);
+            parts += 1;
+            if let Some(f) = r.step(&mut going).unwrap() {
+                break f;
+            }
+        };
+        // Prefix, five bands, suffix.
+        assert_eq!(parts, 7, "{preset}");
+        let d = max_diff(&whole.rgba, &sliced.rgba);
+        assert!(d <= 1, "{preset}: sliced differs from whole by {d}");
+        assert!(sliced.render_ms > 0.0);
+    }
+}
+
+#[test]
+fn foveated_frames_stay_whole_and_abandoned_frames_free_their_targets() {
+    let mut r = renderer();
+    assert!(matches!(
+        r.begin(&request(Preset::Balanced, 1), 8).unwrap(),
+        Progress::Done(_)
+    ));
+    let going = match r.begin(&request(Preset::Full, 2), 4).unwrap() {
+        Progress::Going(g) => g,
+        Progress::Done(_) => panic!("not sliced"),
+    };
+    assert_eq!(going.stream(), 2);
+    r.abandon(going);
+    // A released stream's frame in flight fails cleanly instead of touching freed targets.
+    let mut going = match r.begin(&request(Preset::Full, 4), 4).unwrap() {
+        Progress::Going(g) => g,
+        Progress::Done(_) => panic!("not sliced"),
+    };
+    r.release_stream(4);
+    let err = r.step(&mut going).err().map(|e| e.to_string());
+    assert!(
+        err.as_deref().is_some_and(|e| e.contains("released")),
+        "{err:?}"
+    );
+}
