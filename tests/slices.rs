@@ -19,7 +19,11 @@ fn renderer() -> Renderer {
 /// Largest difference of any channel between two images.
 fn max_diff(a: &[u8], b: &[u8]) -> u8 {
     assert_eq!(a.len(), b.len());
-    a.iter().zip(b).map(|(x, y)| x.abs_diff(*y)).max().unwrap_or(0)
+    a.iter()
+        .zip(b)
+        .map(|(x, y)| x.abs_diff(*y))
+        .max()
+        .unwrap_or(0)
 }
 
 #[test]
@@ -29,7 +33,9 @@ fn a_sliced_frame_with_others_between_its_parts_equals_the_whole_frame() {
         let whole = r.render(&request(preset, 1)).unwrap();
         let mut going = match r.begin(&request(preset, 2), 5).unwrap() {
             Progress::Going(g) => g,
-            Progress::Done(_) => panic!("{preset}: a full-shading frame asked for 5 slices is sliced"),
+            Progress::Done(_) => {
+                panic!("{preset}: a full-shading frame asked for 5 slices is sliced")
+            }
         };
         let mut parts = 1;
         let sliced = loop {

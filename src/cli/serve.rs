@@ -60,6 +60,12 @@ pub struct ServeArgs {
     /// the kernel's backlog until one closes.
     #[arg(long, default_value_t = 256, value_parser = clap::value_parser!(u64).range(1..=65536))]
     pub max_pending: u64,
+    /// Longest a session's frame may take on the renderer, counting its share with the other
+    /// sessions (its render time × sessions rendering). A hello or settings change past it is
+    /// refused with `over_budget`, naming the largest size that fits. Frames longer than
+    /// 100 ms are rendered in parts, so others' frames are never stuck behind one.
+    #[arg(long, default_value_t = 10.0, value_parser = super::parse::parse_seconds)]
+    pub frame_budget_s: f64,
 }
 
 impl ServeArgs {
@@ -77,6 +83,7 @@ impl ServeArgs {
             catalog: fovea::scene::Catalog::with_folders(&self.scenes)?,
             drain: secs(self.drain_s),
             access,
+            frame_budget: secs(self.frame_budget_s),
             connections: fovea::server::ConnectionLimits {
                 header_timeout: secs(self.header_timeout_s),
                 max_pending: self.max_pending as usize,
@@ -108,8 +115,18 @@ pub fn serve(args: ServeArgs) -> Result<()> {
             tracing::error!("scene {} does not load onto the GPU: {e}", entry.name);
         }
     }
+    let cost = fovea::render::cost::CostModel::default();
+    let took = fovea::render::cost::calibrate(&mut renderer, &cost, fovea::scene::DEFAULT_SCENE);
+    let took: Vec<String> = took
+        .iter()
+        .map(|(p, ms)| format!("{p} {ms:.0} ms"))
+        .collect();
+    tracing::info!(
+        "estimated 1920x1080 frame times on this adapter (calibrated; admission and slicing start from these): {}",
+        took.join(", ")
+    );
     let (render, render_thread) =
-        RenderThread::spawn(renderer).context("starting the render thread")?;
+        RenderThread::spawn_with(renderer, cost).context("starting the render thread")?;
     let runtime = tokio::runtime::Runtime::new().context("starting the async runtime")?;
     runtime.block_on(async move {
         let listener = tokio::net::TcpListener::bind(addr)

@@ -37,6 +37,9 @@ pub enum ErrorCode {
     RenderFailed,
     /// The session's recording reached its size limit and stopped; the session goes on.
     RecordingStopped,
+    /// The frame asked for (`hello`, or a `settings` change) would take longer than
+    /// `limits.frame_budget_ms` at the current load; the message says the largest size that fits.
+    OverBudget,
 }
 
 /// A rejected client message: the code for programs, the sentence for people.

@@ -14,6 +14,15 @@ pub struct Limits {
     pub pupil_mm: [f64; 2],
     /// Gaze coordinates are normalised to the frame, top-left origin, both in this closed range.
     pub gaze: [f64; 2],
+    /// Longest a session's frame may take on the render thread, shared fairly among the
+    /// sessions rendering (its own render time × sessions); a `hello` or `settings` past it is
+    /// refused with `over_budget`.
+    #[serde(default)]
+    pub frame_budget_ms: f64,
+    /// Longest piece of work another session's frame can wait behind: longer frames are
+    /// rendered in parts of about this length, others' frames in between.
+    #[serde(default)]
+    pub slice_ms: f64,
     /// What the server's scene files may hold (`serve --scenes`; `docs/scenes.md`).
     #[serde(default)]
     pub scene_files: SceneFileLimits,
@@ -53,6 +62,9 @@ impl Default for Limits {
             max_in_flight: 8,
             pupil_mm: [1.0, 10.0],
             gaze: [0.0, 1.0],
+            frame_budget_ms: 10_000.0,
+            // The server states its renderer's (`render::SLICE_MS`).
+            slice_ms: 0.0,
             scene_files: SceneFileLimits::default(),
         }
     }

@@ -10,6 +10,7 @@
 //!
 //! This module imports nothing from `protocol` or `server` (`tests/boundaries.rs`).
 
+pub mod cost;
 pub mod cpu_reference;
 mod device;
 pub mod frame;
@@ -17,24 +18,27 @@ mod frame_uniform;
 mod gi;
 pub mod gpu;
 pub mod graph;
+mod inspect;
 pub mod lights;
 pub mod materials;
 pub mod pass;
 mod renderer;
-mod inspect;
 mod request;
 mod scene_gpu;
+mod scheduler;
 mod sliced;
 mod targets;
 pub mod textures;
 mod thread;
 pub mod timer;
+mod turns;
 pub mod uniforms;
 
 pub use device::Gpu;
 pub use renderer::Renderer;
-pub use sliced::{bands, FrameInFlight, Progress};
 pub use request::{FrameRequest, Inspection, RenderedFrame, DEFAULT_PUPIL_MM, MAX_SIDE, MIN_XI};
+pub use scheduler::SLICE_MS;
+pub use sliced::{bands, FrameInFlight, Progress};
 pub use thread::{RenderHandle, RenderThread, Rendered};
 
 #[derive(Debug, thiserror::Error)]

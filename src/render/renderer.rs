@@ -3,14 +3,13 @@
 
 use std::collections::HashMap;
 
-
 use super::gi::upload_radiosity;
 use super::graph::{Pipelines, Resources};
 use super::pass::photons::{PhotonInputs, PhotonPass};
 use super::pass::shadow::shadow_view;
 use super::request::{FrameRequest, RenderedFrame};
-use super::sliced::Progress;
 use super::scene_gpu::SceneGpu;
+use super::sliced::Progress;
 use super::targets::FrameTargets;
 use super::timer::PassTimer;
 use super::{gpu, Gpu, RenderError};

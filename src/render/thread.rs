@@ -1,19 +1,20 @@
 //! The render thread: the only place that touches the GPU. Sessions send it requests over a
 //! bounded channel and await the reply, so async tasks never block on GPU work.
 
-use std::panic::AssertUnwindSafe;
 use std::thread::JoinHandle;
 use std::time::Instant;
 
 use tokio::sync::{mpsc, oneshot};
 
+use super::cost::CostModel;
+use super::scheduler::Scheduler;
 use super::{FrameRequest, RenderError, RenderedFrame, Renderer};
 
-/// Requests waiting for the GPU. Small on purpose: sessions hold at most one request each in
-/// flight, and a queue longer than that would only add latency.
+/// Requests on their way to the render thread, which takes them all into its own list of
+/// waiting frames and chooses among them (`scheduler.rs`).
 const QUEUE_DEPTH: usize = 16;
 
-enum Job {
+pub(super) enum Job {
     Render {
         request: FrameRequest,
         reply: oneshot::Sender<Result<Rendered, RenderError>>,
@@ -35,6 +36,7 @@ pub struct RenderHandle {
     tx: mpsc::Sender<Job>,
     adapter: String,
     solves: super::renderer::Solves,
+    cost: CostModel,
 }
 
 impl RenderHandle {
@@ -69,6 +71,12 @@ impl RenderHandle {
         self.solves.lock().map(|s| s.clone()).unwrap_or_default()
     }
 
+    /// Expected render milliseconds of `request` on this adapter, once a frame of its kind has
+    /// been rendered (or calibrated).
+    pub fn estimate_ms(&self, request: &FrameRequest) -> Option<f64> {
+        self.cost.estimate_ms(request)
+    }
+
     /// The adapter's one-line description.
     pub fn adapter(&self) -> &str {
         &self.adapter
@@ -80,58 +88,29 @@ pub struct RenderThread;
 impl RenderThread {
     /// Moves `renderer` onto a new thread. The thread ends when every handle is dropped.
     pub fn spawn(renderer: Renderer) -> std::io::Result<(RenderHandle, JoinHandle<()>)> {
+        RenderThread::spawn_with(renderer, CostModel::default())
+    }
+
+    /// The same, with frame costs already learnt (see [`super::cost::calibrate`]).
+    pub fn spawn_with(
+        renderer: Renderer,
+        cost: CostModel,
+    ) -> std::io::Result<(RenderHandle, JoinHandle<()>)> {
         let adapter = renderer.adapter();
         let solves = renderer.solves();
         let (tx, rx) = mpsc::channel(QUEUE_DEPTH);
+        let model = cost.clone();
         let join = std::thread::Builder::new()
             .name("fovea-render".into())
-            .spawn(move || run(renderer, rx))?;
+            .spawn(move || Scheduler::new(renderer, model).run(rx))?;
         Ok((
             RenderHandle {
                 tx,
                 adapter,
                 solves,
+                cost,
             },
             join,
         ))
     }
-}
-
-fn run(mut renderer: Renderer, mut rx: mpsc::Receiver<Job>) {
-    while let Some(job) = rx.blocking_recv() {
-        let (request, reply) = match job {
-            Job::Render { request, reply } => (request, reply),
-            Job::Release(stream) => {
-                renderer.release_stream(stream);
-                continue;
-            }
-        };
-        // Work only for the living: a session that ended while its job waited has dropped the
-        // receiver, and nobody would see the frame.
-        if reply.is_closed() {
-            ::metrics::counter!("fovea_frames_abandoned_total").increment(1);
-            tracing::debug!(
-                stream = request.stream,
-                "skipping the frame of a session that has gone"
-            );
-            continue;
-        }
-        let started = Instant::now();
-        let span = tracing::debug_span!("render", w = request.width, h = request.height);
-        let _enter = span.enter();
-        // A panic inside the driver stack must not take every session down with it.
-        let result = std::panic::catch_unwind(AssertUnwindSafe(|| renderer.render(&request)))
-            .unwrap_or_else(|panic| {
-                let what = panic
-                    .downcast_ref::<String>()
-                    .cloned()
-                    .or_else(|| panic.downcast_ref::<&str>().map(|s| s.to_string()))
-                    .unwrap_or_else(|| "unknown panic".into());
-                tracing::error!("render panicked: {what}");
-                Err(RenderError::Gpu(format!("renderer panicked: {what}")))
-            });
-        // The session may have gone away meanwhile; then nobody wants the frame.
-        let _ = reply.send(result.map(|frame| Rendered { frame, started }));
-    }
-    tracing::debug!("render thread stopping: no more handles");
 }

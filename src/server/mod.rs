@@ -3,6 +3,7 @@
 //! can bind 127.0.0.1:0 and stop it when they are done.
 
 pub mod access;
+mod admission;
 mod app;
 mod assets;
 mod camera;
@@ -101,6 +102,8 @@ pub struct ServerOptions {
     pub access: access::Access,
     /// Header deadline and cap on HTTP connections that are not sessions.
     pub connections: ConnectionLimits,
+    /// Longest a session's frame may take, its render time × the sessions sharing the GPU.
+    pub frame_budget: Duration,
 }
 
 impl Default for ServerOptions {
@@ -116,6 +119,7 @@ impl Default for ServerOptions {
             drain: Duration::from_secs(10),
             access: access::Access::default(),
             connections: ConnectionLimits::default(),
+            frame_budget: Duration::from_secs(10),
         }
     }
 }
@@ -166,7 +170,11 @@ pub async fn run_with(
         .collect();
     let state = Arc::new(ServerState {
         render,
-        limits: Limits::default(),
+        limits: Limits {
+            frame_budget_ms: options.frame_budget.as_secs_f64() * 1e3,
+            slice_ms: crate::render::SLICE_MS,
+            ..Limits::default()
+        },
         scenes,
         cameras,
         next_session: AtomicU64::new(1),

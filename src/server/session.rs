@@ -211,6 +211,7 @@ impl Session {
                 format!("send hello before {what}"),
             ));
         };
+        let before = self.settings.clone();
         match msg {
             ClientMessage::Hello(_) => None,
             ClientMessage::Gaze(gaze) => {
@@ -226,6 +227,14 @@ impl Session {
             }
             ClientMessage::Settings(patch) => match self.settings.apply(&patch) {
                 Ok(()) => {
+                    let hello = self.hello.as_ref()?;
+                    let probe = cost_probe(hello, &self.settings, self.id);
+                    let label = self.settings.label();
+                    if let Err(e) = super::admission::check(&self.state, &probe, &label) {
+                        // Refused: the session goes on as it was.
+                        self.settings = before;
+                        return Some(error(e.code, e.message));
+                    }
                     pacer.on_settings(now);
                     let preset = self.settings.label();
                     tracing::debug!(session = self.id, %preset, "settings changed");
@@ -307,6 +316,11 @@ impl Session {
         let Some(preset) = Preset::from_name(&hello.preset) else {
             return knob_error(KnobError::UnknownPreset(hello.preset.clone()));
         };
+        let probe = cost_probe(&hello, &Settings::of(preset), self.id);
+        if let Err(e) = super::admission::check(state, &probe, preset.name()) {
+            tracing::info!(session = self.id, "hello refused: {}", e.message);
+            return error(e.code, e.message);
+        }
         tracing::info!(session = self.id, scene = %hello.scene, w = hello.width, h = hello.height, codec = ?hello.codec, "session started");
         let welcome = Welcome {
             v: PROTOCOL_VERSION,
@@ -430,6 +444,15 @@ impl Session {
                 Err(e) => tracing::warn!(session = self.id, "gaze recording failed: {e}"),
             }
         }
+    }
+}
+
+/// What decides a frame's cost (size, settings), for admission.
+fn cost_probe(hello: &Hello, settings: &Settings, id: u64) -> FrameRequest {
+    FrameRequest {
+        settings: settings.render.clone(),
+        stream: id,
+        ..FrameRequest::new(&hello.scene, hello.width, hello.height)
     }
 }
 

@@ -49,7 +49,11 @@ pub fn record_grid(f: &mut Recorder) -> Result<(), GraphError> {
 /// can run between its slices. The frame uniform's `shade_rows` must hold the same rows.
 pub fn record_rows(f: &mut Recorder, first: u32, end: u32) -> Result<(), GraphError> {
     let mut d = f.frame_dispatch(&PASS, "shade_grid")?;
-    d.size = DispatchSize::Groups(f.size.0.div_ceil(8), end.saturating_sub(first).div_ceil(8), 1);
+    d.size = DispatchSize::Groups(
+        f.size.0.div_ceil(8),
+        end.saturating_sub(first).div_ceil(8),
+        1,
+    );
     f.compute(PASS.label, &[d]);
     Ok(())
 }

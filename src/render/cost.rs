@@ -1,0 +1,219 @@
+//! What a frame costs the render thread, learnt from the frames it renders: a fixed part and
+//! milliseconds per megapixel for each kind of frame (scene, foveated or not, translucency
+//! rung). The fixed part matters: a foveated frame's passes cost about the same at 320×240 as
+//! at 640×480, so a per-pixel figure from small frames alone would call 4K frames many times
+//! dearer than they are. The server
+//! admits a session only if its frames fit the per-frame budget, and the render thread splits
+//! frames expected to be long into slices. Estimates start from a calibration at start-up
+//! ([`calibrate`]) and follow the frames actually rendered.
+
+use std::collections::HashMap;
+use std::sync::{Arc, Mutex};
+
+use super::request::FrameRequest;
+use super::Renderer;
+use crate::settings::{Preset, RenderSettings};
+
+/// Weight of the newest frame in the running estimate: a few frames to follow a change, not
+/// thrown by one slow frame.
+const NEWEST: f64 = 0.2;
+
+/// The kinds of frame whose cost per pixel differs by more than noise.
+#[derive(Debug, Clone, PartialEq, Eq, Hash)]
+struct CostClass {
+    scene: String,
+    foveated: bool,
+    rung: u32,
+}
+
+impl CostClass {
+    fn of(req: &FrameRequest) -> CostClass {
+        CostClass {
+            scene: req.scene.clone(),
+            foveated: req.settings.foveation.enabled,
+            rung: req.settings.translucency.rung.id(),
+        }
+    }
+}
+
+/// A kind of frame's cost: `fixed_ms + per_mp × megapixels`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+struct Fit {
+    fixed_ms: f64,
+    per_mp: f64,
+}
+
+impl Fit {
+    fn at(&self, mp: f64) -> f64 {
+        self.fixed_ms + self.per_mp * mp
+    }
+
+    /// The line through two measured frames; the per-pixel part never negative.
+    fn through((mp0, ms0): (f64, f64), (mp1, ms1): (f64, f64)) -> Option<Fit> {
+        let ok = |x: f64| x.is_finite() && x >= 0.0;
+        if !(ok(mp0) && ok(ms0) && ok(mp1) && ok(ms1)) || mp1 <= mp0 {
+            return None;
+        }
+        let per_mp = ((ms1 - ms0) / (mp1 - mp0)).max(0.0);
+        Some(Fit {
+            fixed_ms: (ms0 - per_mp * mp0).max(0.0),
+            per_mp,
+        })
+    }
+}
+
+/// Running estimates, shared between the render thread (which learns) and sessions (which ask).
+#[derive(Debug, Clone, Default)]
+pub struct CostModel(Arc<Mutex<HashMap<CostClass, Fit>>>);
+
+fn megapixels(req: &FrameRequest) -> f64 {
+    f64::from(req.width) * f64::from(req.height) / 1e6
+}
+
+impl CostModel {
+    /// Expected render milliseconds of `req`, if a frame of its kind has been seen (of its
+    /// scene, else of any scene: the same rung costs alike per pixel across our scenes).
+    pub fn estimate_ms(&self, req: &FrameRequest) -> Option<f64> {
+        let map = self.0.lock().ok()?;
+        let class = CostClass::of(req);
+        let mp = megapixels(req);
+        map.get(&class).map(|f| f.at(mp)).or_else(|| {
+            map.iter()
+                .filter(|(c, _)| c.foveated == class.foveated && c.rung == class.rung)
+                .map(|(_, f)| f.at(mp))
+                .reduce(f64::max)
+        })
+    }
+
+    /// Learns from a frame that took `ms` of render-thread time in all: the per-pixel part
+    /// follows it, the fixed part stays what calibration found.
+    pub fn record(&self, req: &FrameRequest, ms: f64) {
+        let mp = megapixels(req);
+        if !(ms.is_finite() && ms >= 0.0 && mp > 0.0) {
+            return;
+        }
+        if let Ok(mut map) = self.0.lock() {
+            let fit = map.entry(CostClass::of(req)).or_insert(Fit {
+                fixed_ms: 0.0,
+                per_mp: ms / mp,
+            });
+            let per_mp = (ms - fit.fixed_ms).max(0.0) / mp;
+            fit.per_mp += NEWEST * (per_mp - fit.per_mp);
+        }
+    }
+
+    /// Sets a kind of frame's cost from two frames of different sizes.
+    fn calibrated(&self, small: (&FrameRequest, f64), large: (&FrameRequest, f64)) {
+        let point = |(r, ms): (&FrameRequest, f64)| (megapixels(r), ms);
+        if let (Some(fit), Ok(mut map)) = (Fit::through(point(small), point(large)), self.0.lock())
+        {
+            map.insert(CostClass::of(small.0), fit);
+        }
+    }
+}
+
+/// Renders frames of `scene` for each preset at two sizes so the first sessions' estimates come
+/// from this adapter (a first frame at each size builds pipelines and is not counted). Returns
+/// each preset's estimate for a 1920×1080 frame, for the log.
+pub fn calibrate(renderer: &mut Renderer, model: &CostModel, scene: &str) -> Vec<(Preset, f64)> {
+    let mut estimates = Vec::new();
+    for (i, preset) in Preset::ALL.into_iter().enumerate() {
+        let stream = u64::MAX - i as u64;
+        let at = |w, h| FrameRequest {
+            settings: RenderSettings::of(preset),
+            stream,
+            ..FrameRequest::new(scene, w, h)
+        };
+        let (small, large) = (at(160, 120), at(480, 360));
+        let mut time = |req: &FrameRequest| {
+            renderer
+                .render(req)
+                .and_then(|_| renderer.render(req))
+                .map(|f| f.render_ms)
+        };
+        match (time(&small), time(&large)) {
+            (Ok(a), Ok(b)) => {
+                model.calibrated((&small, a), (&large, b));
+                if let Some(ms) = model.estimate_ms(&at(1920, 1080)) {
+                    estimates.push((preset, ms));
+                }
+            }
+            (Err(e), _) | (_, Err(e)) => tracing::warn!("calibrating {preset} frames: {e}"),
+        }
+        renderer.release_stream(stream);
+    }
+    estimates
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::settings::Rung;
+
+    fn req(w: u32, h: u32, preset: Preset) -> FrameRequest {
+        FrameRequest {
+            settings: RenderSettings::of(preset),
+            ..FrameRequest::new("gallery", w, h)
+        }
+    }
+
+    #[test]
+    fn estimates_scale_with_pixels_and_follow_new_frames() {
+        let m = CostModel::default();
+        assert_eq!(m.estimate_ms(&req(640, 480, Preset::Reference)), None);
+        m.record(&req(640, 480, Preset::Reference), 300.0);
+        let e = m.estimate_ms(&req(1280, 960, Preset::Reference)).unwrap();
+        assert!((e - 1200.0).abs() < 1e-6, "{e}");
+        // Another kind of frame is not estimated from this one.
+        assert_eq!(m.estimate_ms(&req(640, 480, Preset::Balanced)), None);
+        // Another scene's frame of the same kind is.
+        let mut other = req(640, 480, Preset::Reference);
+        other.scene = "cornell".into();
+        assert!(m.estimate_ms(&other).is_some());
+        for _ in 0..40 {
+            m.record(&req(640, 480, Preset::Reference), 150.0);
+        }
+        let e = m.estimate_ms(&req(640, 480, Preset::Reference)).unwrap();
+        assert!((e - 150.0).abs() < 1.0, "{e}");
+    }
+
+    #[test]
+    fn a_fixed_part_keeps_large_frames_from_looking_dear() {
+        let m = CostModel::default();
+        let (small, large) = (req(160, 120, Preset::Fast), req(480, 360, Preset::Fast));
+        // 40 ms whatever the size, plus 100 ms per megapixel.
+        let ms = |r: &FrameRequest| 40.0 + 100.0 * megapixels(r);
+        m.calibrated((&small, ms(&small)), (&large, ms(&large)));
+        let big = req(3840, 2160, Preset::Fast);
+        let e = m.estimate_ms(&big).unwrap();
+        assert!((e - ms(&big)).abs() < 1e-6, "{e}");
+        // Frames rendered later move the per-pixel part only.
+        for _ in 0..60 {
+            m.record(&big, 40.0 + 50.0 * megapixels(&big));
+        }
+        let e = m.estimate_ms(&small).unwrap();
+        assert!((e - (40.0 + 50.0 * megapixels(&small))).abs() < 0.1, "{e}");
+        // Calibration that makes no sense is ignored.
+        assert_eq!(Fit::through((0.1, 5.0), (0.1, 9.0)), None);
+        assert_eq!(Fit::through((0.1, f64::NAN), (0.2, 9.0)), None);
+        // A larger frame measured faster gives no negative per-pixel cost.
+        let f = Fit::through((0.1, 50.0), (0.2, 40.0)).unwrap();
+        assert!(f.per_mp == 0.0 && f.fixed_ms == 50.0);
+    }
+
+    #[test]
+    fn nonsense_times_and_empty_frames_teach_nothing() {
+        let m = CostModel::default();
+        let r = req(64, 64, Preset::Full);
+        for ms in [f64::NAN, f64::INFINITY, -1.0] {
+            m.record(&r, ms);
+        }
+        m.record(&req(0, 64, Preset::Full), 10.0);
+        assert_eq!(m.estimate_ms(&r), None);
+        m.record(&r, 0.0);
+        assert_eq!(m.estimate_ms(&r), Some(0.0));
+        let mut s = r.clone();
+        s.settings.translucency.rung = Rung::Opaque;
+        assert_eq!(m.estimate_ms(&s), None);
+    }
+}

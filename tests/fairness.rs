@@ -1,0 +1,186 @@
+//! One client cannot take the renderer from the others: a session asking for 4K reference
+//! frames (tens of seconds each on a software adapter) slows only itself, because its frames
+//! are rendered in parts with other sessions' frames in between; and a session whose frames
+//! would not fit the per-frame budget is refused at hello with the figures.
+
+mod common;
+
+use std::time::{Duration, Instant};
+
+use fovea::client::{Client, ClientError, Event};
+use fovea::protocol::{Ack, ErrorCode, Gaze, Hello};
+use fovea::server::ServerOptions;
+
+const WAIT: Duration = Duration::from_secs(60);
+
+fn hello(w: u32, h: u32, preset: &str) -> Hello {
+    Hello {
+        width: w,
+        height: h,
+        preset: preset.into(),
+        ..Default::default()
+    }
+}
+
+/// Drives a session for `span` like a viewer (a moving gaze, every frame acknowledged) and
+/// returns the intervals between its frames, in ms.
+async fn frame_intervals(c: &mut Client, span: Duration) -> Vec<f64> {
+    let start = Instant::now();
+    let mut last: Option<Instant> = None;
+    let mut intervals = Vec::new();
+    let mut t_ms = 0.0;
+    while start.elapsed() < span {
+        t_ms += 10.0;
+        let x = 0.3 + 0.4 * (t_ms / 700.0f64).sin().abs();
+        c.gaze(&Gaze {
+            seq: t_ms as u64,
+            t_ms,
+            x,
+            y: 0.5,
+            pupil_mm: None,
+        })
+        .await
+        .unwrap();
+        match c.next_event(WAIT).await.unwrap() {
+            Event::Frame { header, .. } => {
+                let now = Instant::now();
+                if let Some(l) = last {
+                    intervals.push((now - l).as_secs_f64() * 1e3);
+                }
+                last = Some(now);
+                c.ack(&Ack {
+                    frame: header.frame,
+                    t_ms: None,
+                    dropped: false,
+                })
+                .await
+                .unwrap();
+            }
+            Event::Error(e) => panic!("{e:?}"),
+            other => panic!("unexpected {other:?}"),
+        }
+    }
+    intervals
+}
+
+fn median(mut v: Vec<f64>) -> f64 {
+    assert!(!v.is_empty());
+    v.sort_by(f64::total_cmp);
+    v[v.len() / 2]
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn a_reference_4k_session_slows_only_itself() {
+    let options = ServerOptions {
+        frame_budget: Duration::from_secs(600),
+        ..ServerOptions::default()
+    };
+    let (addr, server) = common::start_calibrated(options).await;
+    let url = format!("ws://{addr}/ws");
+    let mut light = Client::connect(&url).await.unwrap();
+    let welcome = light.hello(&hello(320, 240, "balanced")).await.unwrap();
+    let slice_ms = welcome.limits.slice_ms;
+    assert!(slice_ms > 0.0, "welcome states the slice length");
+    let alone = median(frame_intervals(&mut light, Duration::from_secs(3)).await);
+
+    let mut heavy = Client::connect(&url).await.unwrap();
+    heavy.hello(&hello(3840, 2160, "reference")).await.unwrap();
+    tokio::time::sleep(Duration::from_millis(500)).await;
+    let began = Instant::now();
+    let with = frame_intervals(&mut light, Duration::from_secs(4)).await;
+    let frames = with.len();
+    let with = median(with);
+    // The heavy frame is still being rendered: nothing arrived for it meanwhile.
+    let heavy_done = matches!(
+        heavy.next_event(Duration::from_millis(10)).await,
+        Ok(Event::Frame { .. })
+    );
+    eprintln!(
+        "light session: median frame interval {alone:.0} ms alone, {with:.0} ms beside a 4K \
+         reference session ({frames} frames in {:.1} s; slice {slice_ms} ms; heavy frame done: {heavy_done})",
+        began.elapsed().as_secs_f64()
+    );
+    assert!(
+        with <= 2.0 * (alone + slice_ms),
+        "beside the heavy session the light one's frames came every {with:.0} ms, against \
+         {alone:.0} ms alone plus a {slice_ms} ms slice"
+    );
+    drop(heavy);
+    drop(light);
+    server.stop().await;
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn frames_over_the_budget_are_refused_naming_the_limit_and_a_size_that_fits() {
+    let options = ServerOptions {
+        // Between this adapter's 1280×720 fast frames (~0.5 s on lavapipe) and its reference
+        // ones (~3 s), so both sides are clear on any machine that scales the two alike.
+        frame_budget: Duration::from_millis(1300),
+        ..ServerOptions::default()
+    };
+    let (addr, server) = common::start_calibrated(options).await;
+    let url = format!("ws://{addr}/ws");
+    let mut c = Client::connect(&url).await.unwrap();
+    let refusal = c.hello(&hello(3840, 2160, "reference")).await;
+    let message = match refusal {
+        Err(ClientError::Refused(ErrorCode::OverBudget, m)) => m,
+        other => panic!("a 4K reference hello under a 1.3 s budget: {other:?}"),
+    };
+    assert!(
+        message.contains("1.3 s") && message.contains("at most"),
+        "{message}"
+    );
+    // The size it names is admitted on the same socket.
+    let fit = message
+        .rsplit("at most ")
+        .next()
+        .unwrap()
+        .split(' ')
+        .next()
+        .unwrap();
+    let (w, h) = fit.split_once('x').unwrap();
+    let (w, h): (u32, u32) = (w.parse().unwrap(), h.parse().unwrap());
+    assert!(w < 3840 && h < 2160 && w * 9 / 16 <= h + 1, "{fit}");
+    c.hello(&hello(w, h, "reference")).await.unwrap();
+    drop(c);
+
+    // A settings change past the budget is refused and the session goes on as it was.
+    let mut c = Client::connect(&url).await.unwrap();
+    c.hello(&hello(1280, 720, "fast"))
+        .await
+        .unwrap_or_else(|e| panic!("a foveated 1280x720 hello is within 1.3 s here: {e}"));
+    c.send_text(r#"{"type":"settings","preset":"reference"}"#)
+        .await
+        .unwrap();
+    let mut refused = false;
+    for _ in 0..8 {
+        match c.next_event(WAIT).await.unwrap() {
+            Event::Error(e) if e.code == ErrorCode::OverBudget => refused = true,
+            Event::Frame { header, .. } => {
+                c.ack(&Ack {
+                    frame: header.frame,
+                    t_ms: None,
+                    dropped: false,
+                })
+                .await
+                .unwrap();
+                if refused {
+                    assert!(header.sampled < 1.0, "still foveated after the refusal");
+                    break;
+                }
+                c.gaze(&Gaze {
+                    seq: 1,
+                    t_ms: 1.0,
+                    x: 0.4,
+                    y: 0.5,
+                    pupil_mm: None,
+                })
+                .await
+                .unwrap();
+            }
+            other => panic!("unexpected {other:?}"),
+        }
+    }
+    assert!(refused, "the reference settings were not refused");
+    server.stop().await;
+}
