@@ -134,7 +134,10 @@ async fn two_sessions_each_get_frames_that_answer_their_own_gaze() {
     assert_ne!(wa.session, wb.session);
     assert_eq!(
         wa.limits,
-        fovea::protocol::Limits::default(),
+        fovea::protocol::Limits {
+            slice_ms: fovea::render::SLICE_MS,
+            ..fovea::protocol::Limits::default()
+        },
         "welcome states the limits"
     );
     let (mut frames_a, mut frames_b) = (0, 0);

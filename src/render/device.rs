@@ -1,3 +1,4 @@
+use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
 
 use super::RenderError;
@@ -7,6 +8,9 @@ pub struct Gpu {
     pub device: wgpu::Device,
     pub queue: wgpu::Queue,
     pub info: wgpu::AdapterInfo,
+    /// Set by the driver when the device is lost (reset, removed, destroyed): nothing rendered
+    /// on it works again, and the render thread opens a new one.
+    lost: Arc<AtomicBool>,
 }
 
 impl Gpu {
@@ -69,6 +73,12 @@ impl Gpu {
         // Errors are caught per frame with error scopes; anything that escapes one is logged
         // rather than panicking the render thread that every session shares.
         device.on_uncaptured_error(Arc::new(|e| tracing::error!("uncaptured GPU error: {e:?}")));
+        let lost = Arc::new(AtomicBool::new(false));
+        let flag = lost.clone();
+        device.set_device_lost_callback(move |reason, message| {
+            tracing::error!("GPU device lost ({reason:?}): {message}");
+            flag.store(true, Ordering::SeqCst);
+        });
         tracing::info!(
             name = %info.name,
             backend = ?info.backend,
@@ -81,7 +91,13 @@ impl Gpu {
             device,
             queue,
             info,
+            lost,
         })
+    }
+
+    /// Whether the device has been lost.
+    pub fn is_lost(&self) -> bool {
+        self.lost.load(Ordering::SeqCst)
     }
 
     /// One line naming the adapter, for logs, `welcome` and benchmark reports.

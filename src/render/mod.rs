@@ -18,6 +18,7 @@ mod frame_uniform;
 mod gi;
 pub mod gpu;
 pub mod graph;
+pub mod health;
 mod inspect;
 pub mod lights;
 pub mod materials;

@@ -159,6 +159,26 @@ impl Renderer {
         self.solves.clone()
     }
 
+    /// Takes over `solves` as the list this renderer keeps its radiosity solves in (a restarted
+    /// renderer keeps reporting on the list `/readyz` reads).
+    pub fn share_solves(&mut self, solves: Solves) {
+        if let Ok(mut list) = solves.lock() {
+            list.clear();
+        }
+        self.solves = solves;
+    }
+
+    /// Whether the GPU device has been lost (then nothing renders until a new one is opened).
+    pub fn is_lost(&self) -> bool {
+        self.gpu.is_lost()
+    }
+
+    /// Destroys the device, as a driver reset would: for tests of what follows.
+    #[doc(hidden)]
+    pub fn lose_device(&self) {
+        self.gpu.device.destroy();
+    }
+
     /// How many times a photon pyramid has been built (static scenes: once per scene).
     pub fn pyramid_builds(&self) -> u64 {
         self.pyramid_builds

@@ -9,6 +9,7 @@ use std::time::Instant;
 use tokio::sync::{mpsc, oneshot};
 
 use super::cost::CostModel;
+use super::health::Health;
 use super::sliced::{FrameInFlight, Progress};
 use super::thread::{Job, Rendered};
 use super::turns::Turns;
@@ -31,7 +32,7 @@ struct Task {
 }
 
 struct Going {
-    frame: FrameInFlight,
+    frame: Box<FrameInFlight>,
     started: Instant,
     spent_ms: f64,
 }
@@ -42,16 +43,18 @@ pub struct Scheduler {
     turns: Turns,
     tasks: Vec<Task>,
     arrivals: u64,
+    health: Health,
 }
 
 impl Scheduler {
-    pub fn new(renderer: Renderer, cost: CostModel) -> Scheduler {
+    pub fn new(renderer: Renderer, cost: CostModel, health: Health) -> Scheduler {
         Scheduler {
             renderer,
             cost,
             turns: Turns::default(),
             tasks: Vec::new(),
             arrivals: 0,
+            health,
         }
     }
 
@@ -96,6 +99,7 @@ impl Scheduler {
                 // Its frame in flight, if any, is unpinned along with its targets.
                 self.renderer.release_stream(stream);
             }
+            Job::LoseDevice => self.renderer.lose_device(),
         }
     }
 
@@ -115,7 +119,7 @@ impl Scheduler {
                 "dropping the frame of a session that has gone"
             );
             if let Some(g) = task.going {
-                self.renderer.abandon(g.frame);
+                self.renderer.abandon(*g.frame);
             }
         }
     }
@@ -196,21 +200,46 @@ impl Scheduler {
             .going
             .as_ref()
             .map_or((begun, ms), |g| (g.started, g.spent_ms));
+        let mut restart = false;
         let result = match outcome {
             Ok(Some(frame)) => {
                 self.cost.record(&task.request, spent);
+                self.health.frame_ok();
                 Ok(Rendered { frame, started })
             }
             Ok(None) => return,
             Err(e) => {
                 if let Some(g) = task.going {
-                    self.renderer.abandon(g.frame);
+                    self.renderer.abandon(*g.frame);
                 }
+                restart = self.health.frame_failed(&e, self.renderer.is_lost());
                 Err(e)
             }
         };
         // The session may have gone away meanwhile; then nobody wants the frame.
         let _ = task.reply.send(result);
+        if restart {
+            self.restart();
+        }
+    }
+
+    /// Replaces a renderer that keeps failing (or lost its device). Frames in flight on the
+    /// old one are lost and their sessions told; waiting frames render on the new one.
+    fn restart(&mut self) {
+        let Some(fresh) = self.health.restart(&self.renderer) else {
+            return;
+        };
+        self.renderer = fresh;
+        let mut i = 0;
+        while i < self.tasks.len() {
+            if self.tasks[i].going.is_none() {
+                i += 1;
+                continue;
+            }
+            let task = self.tasks.remove(i);
+            let lost = RenderError::Gpu("the renderer restarted; this frame was lost".into());
+            let _ = task.reply.send(Err(lost));
+        }
     }
 }
 

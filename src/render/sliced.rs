@@ -26,7 +26,7 @@ use super::RenderError;
 /// Where a frame stands after [`Renderer::begin`] or [`Renderer::step`].
 pub enum Progress {
     Done(RenderedFrame),
-    Going(FrameInFlight),
+    Going(Box<FrameInFlight>),
 }
 
 /// A sliced frame between its parts.
@@ -103,7 +103,7 @@ impl Renderer {
         };
         if sliced {
             self.pinned.push(key);
-            return Ok(Progress::Going(going));
+            return Ok(Progress::Going(Box::new(going)));
         }
         self.finish(going, ti).map(Progress::Done)
     }

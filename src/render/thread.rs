@@ -7,6 +7,7 @@ use std::time::Instant;
 use tokio::sync::{mpsc, oneshot};
 
 use super::cost::CostModel;
+use super::health::Health;
 use super::scheduler::Scheduler;
 use super::{FrameRequest, RenderError, RenderedFrame, Renderer};
 
@@ -21,6 +22,8 @@ pub(super) enum Job {
     },
     /// A stream (session) ended: free its targets and history.
     Release(u64),
+    /// Destroy the device, as a driver reset would (tests of the restart).
+    LoseDevice,
 }
 
 /// A rendered frame plus when the render thread started on it (its wait ended).
@@ -37,6 +40,7 @@ pub struct RenderHandle {
     adapter: String,
     solves: super::renderer::Solves,
     cost: CostModel,
+    health: Health,
 }
 
 impl RenderHandle {
@@ -77,6 +81,26 @@ impl RenderHandle {
         self.cost.estimate_ms(request)
     }
 
+    /// Why the renderer is failing (frames failing on the GPU, a restart that did not work),
+    /// if it is: `/readyz` answers 503 meanwhile.
+    pub fn failing(&self) -> Option<String> {
+        self.health.failing()
+    }
+
+    /// How many times the render thread has replaced its renderer.
+    pub fn restarts(&self) -> u64 {
+        self.health.restarts()
+    }
+
+    /// Destroys the GPU device as a driver reset would; the render thread then opens a new one.
+    #[doc(hidden)]
+    pub async fn lose_device(&self) -> Result<(), RenderError> {
+        self.tx
+            .send(Job::LoseDevice)
+            .await
+            .map_err(|_| RenderError::ThreadGone)
+    }
+
     /// The adapter's one-line description.
     pub fn adapter(&self) -> &str {
         &self.adapter
@@ -100,15 +124,18 @@ impl RenderThread {
         let solves = renderer.solves();
         let (tx, rx) = mpsc::channel(QUEUE_DEPTH);
         let model = cost.clone();
+        let health = Health::default();
+        let reports = health.clone();
         let join = std::thread::Builder::new()
             .name("fovea-render".into())
-            .spawn(move || Scheduler::new(renderer, model).run(rx))?;
+            .spawn(move || Scheduler::new(renderer, model, reports).run(rx))?;
         Ok((
             RenderHandle {
                 tx,
                 adapter,
                 solves,
                 cost,
+                health,
             },
             join,
         ))

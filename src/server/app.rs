@@ -28,6 +28,13 @@ async fn readyz(State(state): State<Arc<ServerState>>) -> Response {
     if state.draining.is_cancelled() {
         return (StatusCode::SERVICE_UNAVAILABLE, "draining\n").into_response();
     }
+    if let Some(reason) = state.render.failing() {
+        return (
+            StatusCode::SERVICE_UNAVAILABLE,
+            format!("renderer failing: {reason}\n"),
+        )
+            .into_response();
+    }
     if state.slots.available_permits() > 0 {
         let mut body = String::from("ready\n");
         for solve in state.render.solves() {

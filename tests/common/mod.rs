@@ -36,26 +36,32 @@ pub async fn start(options: ServerOptions) -> (SocketAddr, Running) {
 
 /// A server on `addr`: a given port lets a test put a second instance where a drained one was.
 pub async fn start_on(addr: SocketAddr, options: ServerOptions) -> (SocketAddr, Running) {
-    start_with(addr, options, false).await
+    let renderer = Renderer::new().unwrap_or_else(|e| panic!("GPU tests need an adapter: {e}"));
+    start_with(addr, options, renderer, Default::default()).await
 }
 
 /// A server whose frame costs are calibrated first, as `fovea serve` does (admission and
 /// slicing then work from this adapter's figures).
 pub async fn start_calibrated(options: ServerOptions) -> (SocketAddr, Running) {
-    start_with("127.0.0.1:0".parse().unwrap(), options, true).await
+    let (renderer, cost) = calibrated();
+    start_with("127.0.0.1:0".parse().unwrap(), options, renderer, cost).await
 }
 
-async fn start_with(
+/// A renderer and its calibrated frame costs, for a test that sets budgets from them.
+pub fn calibrated() -> (Renderer, fovea::render::cost::CostModel) {
+    let mut renderer = Renderer::new().unwrap_or_else(|e| panic!("GPU tests need an adapter: {e}"));
+    let cost = fovea::render::cost::CostModel::default();
+    fovea::render::cost::calibrate(&mut renderer, &cost, fovea::scene::DEFAULT_SCENE);
+    (renderer, cost)
+}
+
+pub async fn start_with(
     addr: SocketAddr,
     options: ServerOptions,
-    calibrate: bool,
+    mut renderer: Renderer,
+    cost: fovea::render::cost::CostModel,
 ) -> (SocketAddr, Running) {
-    let mut renderer = Renderer::new().unwrap_or_else(|e| panic!("GPU tests need an adapter: {e}"));
     renderer.set_catalog(options.catalog.clone());
-    let cost = fovea::render::cost::CostModel::default();
-    if calibrate {
-        fovea::render::cost::calibrate(&mut renderer, &cost, fovea::scene::DEFAULT_SCENE);
-    }
     let (render, thread) = RenderThread::spawn_with(renderer, cost).unwrap();
     let listener = tokio::net::TcpListener::bind(addr).await.unwrap();
     let addr = listener.local_addr().unwrap();
