@@ -67,7 +67,7 @@ fn foveated_frames_stay_whole_and_abandoned_frames_free_their_targets() {
         Progress::Done(_) => panic!("not sliced"),
     };
     assert_eq!(going.stream(), 2);
-    r.abandon(going);
+    r.abandon(*going);
     // A released stream's frame in flight fails cleanly instead of touching freed targets.
     let mut going = match r.begin(&request(Preset::Full, 4), 4).unwrap() {
         Progress::Going(g) => g,
