@@ -26,6 +26,10 @@ pub struct ServeArgs {
     /// on): ~25 bytes a sample, so 64 MiB is ~9 hours at 120 Hz.
     #[arg(long, default_value_t = 64, value_parser = clap::value_parser!(u64).range(1..=16384))]
     pub record_max_mb: u64,
+    /// Recording stops for every session (each client told once) and no new recording starts
+    /// once the --record-dir folder holds this many MiB, runs before this one included.
+    #[arg(long, default_value_t = 1024, value_parser = clap::value_parser!(u64).range(1..=1048576))]
+    pub record_dir_max_mb: u64,
     /// A folder of scenes to serve beside the built-in ones (repeatable): every scene file
     /// (.json) and glTF file (.gltf, .glb) at its top level, named by file stem. Files
     /// they refer to are read from inside the folder only.
@@ -76,6 +80,7 @@ impl ServeArgs {
         Ok(fovea::server::ServerOptions {
             record_dir: self.record_dir,
             record_max_bytes: self.record_max_mb * 1024 * 1024,
+            record_dir_max_bytes: self.record_dir_max_mb * 1024 * 1024,
             max_sessions: self.max_sessions as usize,
             stall_timeout: secs(self.stall_timeout_s),
             hello_timeout: secs(self.hello_timeout_s),

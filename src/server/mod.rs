@@ -65,6 +65,8 @@ pub struct ServerState {
     pub record_dir: Option<std::path::PathBuf>,
     /// Largest recording file; a session's recording stops there.
     pub record_max_bytes: u64,
+    /// What the recording folder may still take, shared by every recorder.
+    pub record_quota: Arc<recorder::Quota>,
     /// Each recording session's file, fetchable by its own client only.
     pub recordings: recordings::Recordings,
     /// One permit per session: admission control (a new client past the limit is refused
@@ -87,6 +89,8 @@ pub struct ServerOptions {
     pub record_dir: Option<std::path::PathBuf>,
     /// A session's recording stops (and its client is told) at this many bytes.
     pub record_max_bytes: u64,
+    /// Recordings stop (and no new one starts) once the record folder holds this many bytes.
+    pub record_dir_max_bytes: u64,
     /// Sessions served at once; more are refused with WebSocket close code 1013.
     pub max_sessions: usize,
     /// Disconnect a client with frames outstanding and no acknowledgement for this long.
@@ -111,6 +115,7 @@ impl Default for ServerOptions {
         ServerOptions {
             record_dir: None,
             record_max_bytes: 64 * 1024 * 1024,
+            record_dir_max_bytes: 1024 * 1024 * 1024,
             max_sessions: 16,
             stall_timeout: Duration::from_secs(10),
             ping_every: Duration::from_secs(10),
@@ -186,6 +191,13 @@ pub async fn run_with(
         access: options.access,
         record_dir,
         record_max_bytes: options.record_max_bytes,
+        record_quota: Arc::new(recorder::Quota::for_folder(
+            options
+                .record_dir
+                .as_deref()
+                .unwrap_or(std::path::Path::new("")),
+            options.record_dir_max_bytes,
+        )),
         recordings: Default::default(),
         slots: Arc::new(tokio::sync::Semaphore::new(options.max_sessions.max(1))),
         max_sessions: options.max_sessions.max(1),

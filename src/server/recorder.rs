@@ -10,6 +10,8 @@
 use std::fs::File;
 use std::io::{BufWriter, Write};
 use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicU64, Ordering};
+use std::sync::Arc;
 
 use crate::protocol::Gaze;
 
@@ -24,24 +26,79 @@ pub struct Recorder {
     /// Bytes written so far, and the most the file may hold.
     written: u64,
     max_bytes: u64,
+    /// What the whole recording folder may still take, shared by every session's recorder.
+    folder: Arc<Quota>,
+}
+
+/// Bytes the recording folder may still take (`--record-dir-max-mb` less what it held at start).
+#[derive(Debug)]
+pub struct Quota(AtomicU64);
+
+impl Quota {
+    /// The folder's limit less what `dir` holds now (every file under it, counted once).
+    pub fn for_folder(dir: &Path, max_bytes: u64) -> Quota {
+        Quota(AtomicU64::new(max_bytes.saturating_sub(folder_bytes(dir))))
+    }
+
+    /// Takes `n` bytes if that many are left.
+    fn take(&self, n: u64) -> bool {
+        self.0
+            .fetch_update(Ordering::SeqCst, Ordering::SeqCst, |left| {
+                left.checked_sub(n)
+            })
+            .is_ok()
+    }
+}
+
+/// Total size of the files under `dir` (two levels: run folders and their files).
+fn folder_bytes(dir: &Path) -> u64 {
+    let size = |p: &Path| std::fs::metadata(p).map_or(0, |m| if m.is_file() { m.len() } else { 0 });
+    let Ok(entries) = std::fs::read_dir(dir) else {
+        return 0;
+    };
+    entries
+        .flatten()
+        .map(|e| {
+            let p = e.path();
+            if p.is_dir() {
+                std::fs::read_dir(&p)
+                    .map(|inner| inner.flatten().map(|f| size(&f.path())).sum())
+                    .unwrap_or(0)
+            } else {
+                size(&p)
+            }
+        })
+        .sum()
 }
 
 /// What a `write` did.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Wrote {
     Row,
-    /// The row would pass the size limit: not written, and nothing more will be.
+    /// The row would pass the file's size limit: not written, and nothing more will be.
     LimitReached,
+    /// The row would pass the recording folder's limit: the same, for the folder.
+    FolderFull,
     /// The recording had already stopped (limit or write error).
     Nothing,
 }
 
 impl Recorder {
-    pub fn create(dir: &Path, session: u64, max_bytes: u64) -> std::io::Result<Recorder> {
+    pub fn create(
+        dir: &Path,
+        session: u64,
+        max_bytes: u64,
+        folder: Arc<Quota>,
+    ) -> std::io::Result<Recorder> {
+        const HEADER: &[u8] = b"t_ms,x,y,pupil_mm\n";
+        if !folder.take(HEADER.len() as u64) {
+            return Err(std::io::Error::other(
+                "the recording folder is at its limit (--record-dir-max-mb)",
+            ));
+        }
         let path = dir.join(format!("session-{session}.csv"));
         let partial = dir.join(format!("session-{session}.csv.partial"));
         let mut writer = BufWriter::new(File::create(&partial)?);
-        const HEADER: &[u8] = b"t_ms,x,y,pupil_mm\n";
         writer.write_all(HEADER)?;
         // The header reaches the file at once: a download before the first second is never empty.
         writer.flush()?;
@@ -54,6 +111,7 @@ impl Recorder {
             flushed: std::time::Instant::now(),
             written: HEADER.len() as u64,
             max_bytes,
+            folder,
         })
     }
 
@@ -75,6 +133,10 @@ impl Recorder {
             // Past the limit the file stays whole and stops; `written` marks it stopped.
             self.written = self.max_bytes + 1;
             return Wrote::LimitReached;
+        }
+        if !self.folder.take(row.len() as u64) {
+            self.written = self.max_bytes + 1;
+            return Wrote::FolderFull;
         }
         if let Err(e) = self.writer.write_all(row.as_bytes()) {
             self.error = Some(e);
@@ -209,7 +271,8 @@ mod tests {
         );
 
         // A recording stops whole at its limit.
-        let mut r = Recorder::create(&run, 9, 80).unwrap();
+        let unlimited = Arc::new(Quota(AtomicU64::new(u64::MAX)));
+        let mut r = Recorder::create(&run, 9, 80, unlimited).unwrap();
         let g = |t: f64| Gaze {
             seq: 1,
             t_ms: t,
@@ -233,6 +296,21 @@ mod tests {
         assert!(text.len() <= 80 && text.ends_with('\n'), "{text:?}");
         // 18 bytes of header and four 13-byte rows fit in 80; a fifth would not.
         assert_eq!(text.lines().count(), 5, "{text:?}");
+
+        // The folder's limit counts what is there and what every recorder writes: the header
+        // and two rows of this one fit, and no further recording can start.
+        let held = folder_bytes(&dir);
+        assert!(held > 80, "{held}");
+        let quota = Arc::new(Quota::for_folder(&dir, held + 18 + 2 * 13));
+        let mut r = Recorder::create(&run, 10, 1 << 20, quota.clone()).unwrap();
+        let wrote: Vec<Wrote> = (0..4).map(|i| r.write(&g(f64::from(i)))).collect();
+        assert_eq!(
+            wrote,
+            [Wrote::Row, Wrote::Row, Wrote::FolderFull, Wrote::Nothing]
+        );
+        assert!(Recorder::create(&run, 11, 1 << 20, quota).is_err());
+        let text = std::fs::read_to_string(r.finish().unwrap()).unwrap();
+        assert_eq!(text.lines().count(), 3, "{text:?}");
         let _ = std::fs::remove_dir_all(&dir);
     }
 }

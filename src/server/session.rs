@@ -171,7 +171,7 @@ fn send_all(conn: &Connection, replies: Vec<Outgoing>) -> Result<(), Gone> {
 impl Session {
     fn new(id: u64, state: Arc<ServerState>) -> Session {
         let recorder = state.record_dir.as_ref().and_then(|dir| {
-            Recorder::create(dir, id, state.record_max_bytes)
+            Recorder::create(dir, id, state.record_max_bytes, state.record_quota.clone())
                 .map_err(|e| {
                     tracing::warn!(session = id, "cannot record gaze to {}: {e}", dir.display())
                 })
@@ -283,17 +283,20 @@ impl Session {
         if let Some(p) = self.predictor.as_mut() {
             p.push(gaze.t_ms, [gaze.x, gaze.y]);
         }
-        let wrote = self.recorder.as_mut().map(|r| r.write(gaze));
-        (wrote == Some(super::recorder::Wrote::LimitReached)).then(|| {
-            let mb = self.state.record_max_bytes / (1024 * 1024);
-            tracing::info!(session = self.id, "recording stopped at its {mb} MiB limit");
-            error(
-                ErrorCode::RecordingStopped,
-                format!(
-                    "this session's recording reached {mb} MiB and stopped; the session goes on"
-                ),
-            )
-        })
+        use super::recorder::Wrote;
+        let why = match self.recorder.as_mut().map(|r| r.write(gaze)) {
+            Some(Wrote::LimitReached) => format!(
+                "this session's recording reached {} MiB",
+                self.state.record_max_bytes / (1024 * 1024)
+            ),
+            Some(Wrote::FolderFull) => "the server's recording folder is at its limit".into(),
+            _ => return None,
+        };
+        tracing::info!(session = self.id, "recording stopped: {why}");
+        Some(error(
+            ErrorCode::RecordingStopped,
+            format!("{why} and stopped; the session goes on"),
+        ))
     }
 
     fn on_hello(&mut self, hello: Hello, now: Instant) -> ServerMessage {
