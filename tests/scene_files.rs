@@ -373,3 +373,26 @@ fn the_bunny_scenes_as_gltf_carry_jensens_media_through_the_volume_mapping() {
         }
     }
 }
+
+#[test]
+fn a_radiosity_lattice_past_the_vertex_limit_is_refused_before_it_is_built() {
+    // The Cornell box with patches of 0.01 units halved six times: 64×64 patches → 4096² cells
+    // per wall, 16.8 million vertices each, where it used to allocate gigabytes and panic.
+    let dir = scratch("fine-lattice");
+    let mut file: serde_json::Value = serde_json::from_str(
+        &std::fs::read_to_string(
+            Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/scenes/cornell.json"),
+        )
+        .unwrap(),
+    )
+    .unwrap();
+    file["radiosity"]["patch_size"] = json!(0.01);
+    file["radiosity"]["max_depth"] = json!(6);
+    file["objects"] = json!([file["objects"][0]]);
+    std::fs::write(dir.join("fine.json"), file.to_string()).unwrap();
+    let err = load(&dir, "fine.json").unwrap_err();
+    assert!(
+        err.contains("4096x4096") && err.contains("patch_size"),
+        "{err}"
+    );
+}

@@ -141,6 +141,12 @@ impl PassDecl {
 
 #[derive(Debug, thiserror::Error)]
 pub enum GraphError {
+    #[error("the scene's {what} need a {bytes}-byte buffer and this device allows {limit}")]
+    TooLarge {
+        what: &'static str,
+        bytes: u64,
+        limit: u64,
+    },
     #[error("pass {pass}: no resource named {name:?}")]
     Missing {
         pass: &'static str,

@@ -33,6 +33,7 @@ impl SceneGpu {
         photon_pass: &PhotonPass,
         scene: Scene,
     ) -> Result<SceneGpu, GraphError> {
+        fits_the_device(&scene, &device.limits())?;
         let mesh = gbuffer::upload(device, &scene);
         let materials = super::materials::upload(
             device,
@@ -109,5 +110,55 @@ impl SceneGpu {
             gi: None,
             gi_version: 0,
         })
+    }
+}
+
+/// Whether the scene's largest buffers fit the device: a scene within the scene-file limits
+/// fits wgpu's default limits (a test checks), but an adapter may offer less, and wgpu would
+/// panic on the buffer rather than say so.
+pub fn fits_the_device(scene: &Scene, limits: &wgpu::Limits) -> Result<(), GraphError> {
+    let vertices = scene.mesh.positions.len() as u64;
+    let needs = [
+        (
+            "vertices",
+            vertices * std::mem::size_of::<gbuffer::Vertex>() as u64,
+        ),
+        (
+            "radiosity",
+            vertices * std::mem::size_of::<gbuffer::GiVertex>() as u64,
+        ),
+        ("indices", scene.mesh.indices.len() as u64 * 4),
+    ];
+    for (what, bytes) in needs {
+        if bytes > limits.max_buffer_size {
+            return Err(GraphError::TooLarge {
+                what,
+                bytes,
+                limit: limits.max_buffer_size,
+            });
+        }
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::scene::limits::{MAX_TRIANGLES, MAX_VERTICES};
+
+    #[test]
+    fn scenes_within_the_file_limits_fit_the_limits_we_ask_the_device_for() {
+        let limits = wgpu::Limits::default();
+        let vertex = std::mem::size_of::<gbuffer::Vertex>() as u64;
+        assert!(MAX_VERTICES as u64 * vertex <= limits.max_buffer_size);
+        assert!(MAX_TRIANGLES as u64 * 12 <= limits.max_buffer_size);
+        let scene = Scene::builtin(crate::scene::DEFAULT_SCENE).unwrap();
+        assert!(fits_the_device(&scene, &limits).is_ok());
+        let small = wgpu::Limits {
+            max_buffer_size: 1024,
+            ..limits
+        };
+        let err = fits_the_device(&scene, &small).unwrap_err().to_string();
+        assert!(err.contains("1024"), "{err}");
     }
 }

@@ -101,6 +101,17 @@ pub fn build_with(
                             "object {i}: quad corners must be finite and form a parallelogram"
                         ))
                     })?;
+                // Checked before the lattice is built: a fine grid at depth 6 would otherwise
+                // allocate hundreds of megabytes before the scene's vertex limit is looked at.
+                let [lu, lv] = crate::radiosity::lattice(cells, depth);
+                let points = (u64::from(lu) + 1) * (u64::from(lv) + 1);
+                if mesh.positions.len() as u64 + points > MAX_VERTICES as u64 {
+                    return Err(invalid(format!(
+                        "object {i}: its radiosity lattice ({lu}x{lv} cells: {cells:?} patches \
+                         halved {depth} times) needs {points} vertices, and the scene may have \
+                         {MAX_VERTICES}; raise radiosity.patch_size or lower max_depth"
+                    )));
+                }
                 quad = Some((corners.map(|p| transform.transform_point3(p)), cells, depth));
                 Loaded::Plain(lattice_mesh(
                     &corners,
