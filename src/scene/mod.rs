@@ -151,6 +151,14 @@ impl Scene {
         Scene::from_json(json)
     }
 
+    /// A glTF (`.gltf` text or `.glb`) held in memory, embedded data only, as the loader reads
+    /// it; for fuzzing the parser without files.
+    pub fn check_gltf_bytes(bytes: &[u8]) -> Result<usize, String> {
+        gltf::import_guarded(bytes, std::path::Path::new("."), None)
+            .map(|i| i.parts.len())
+            .map_err(|e| e.to_string())
+    }
+
     /// A scene file given as text: its meshes must be built in.
     pub fn from_json(json: &str) -> Result<Scene, SceneError> {
         build::build(json, None)

@@ -99,9 +99,18 @@ fn hint(name: &str) -> &'static str {
 pub fn import(path: &Path, folder: &Folder) -> Result<Imported, GltfError> {
     let bytes = read_limited(path).map_err(|e| GltfError::Invalid(e.to_string()))?;
     let base = path.parent().unwrap_or(folder.root()).to_path_buf();
-    // The gltf crate slices buffers with checked `get`s, but a malformed accessor can still
-    // reach an arithmetic overflow inside it; a panic there must not take the server down.
-    std::panic::catch_unwind(|| import_bytes(&bytes, &base, Some(folder))).unwrap_or_else(|_| {
+    import_guarded(&bytes, &base, Some(folder))
+}
+
+/// [`import_bytes`] with the reader's panics turned into errors: the gltf crate slices buffers
+/// with checked `get`s, but a malformed accessor can still reach an arithmetic overflow inside
+/// it, and a panic there must not take the server down.
+pub fn import_guarded(
+    bytes: &[u8],
+    base: &Path,
+    folder: Option<&Folder>,
+) -> Result<Imported, GltfError> {
+    std::panic::catch_unwind(|| import_bytes(bytes, base, folder)).unwrap_or_else(|_| {
         Err(GltfError::Invalid(
             "the file's accessors are inconsistent (the reader gave up)".into(),
         ))
