@@ -43,8 +43,10 @@ fn main() -> anyhow::Result<()> {
     }
     let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("fuzz");
     let mut found = 0;
-    println!("| target | inputs | time | slowest input | most allocated at once | findings |");
-    println!("|---|---|---|---|---|---|");
+    println!(
+        "| target | inputs | accepted | time | slowest input | most allocated at once | findings |"
+    );
+    println!("|---|---|---|---|---|---|---|");
     for (i, target) in targets::TARGETS.iter().enumerate() {
         if !names.is_empty() && !names.iter().any(|n| n == target.name) {
             continue;
@@ -53,9 +55,10 @@ fn main() -> anyhow::Result<()> {
         let began = Instant::now();
         let report = engine::fuzz(target, &corpus, executions, seed.wrapping_add(i as u64));
         println!(
-            "| {} | {} | {:.0} s | {:.1} ms | {} KiB | {} |",
+            "| {} | {} | {:.1}% | {:.0} s | {:.1} ms | {} KiB | {} |",
             target.name,
             report.executions,
+            100.0 * report.accepted as f64 / report.executions.max(1) as f64,
             began.elapsed().as_secs_f64(),
             report.slowest.as_secs_f64() * 1e3,
             report.peak_bytes >> 10,

@@ -60,7 +60,8 @@ unsafe impl GlobalAlloc for Counting {
 
 pub struct Target {
     pub name: &'static str,
-    pub run: fn(&[u8]),
+    /// Parses the input; true when it was accepted (how deep the mutants get).
+    pub run: fn(&[u8]) -> bool,
     /// Tokens worth inserting (keywords, field names, delimiters).
     pub dictionary: &'static [&'static str],
     /// Inputs to start from besides the corpus folder.
@@ -77,6 +78,8 @@ pub enum Finding {
 #[derive(Debug, Default)]
 pub struct Report {
     pub executions: u64,
+    /// Inputs the parser accepted.
+    pub accepted: u64,
     pub findings: Vec<(Finding, Vec<u8>)>,
     pub slowest: Duration,
     pub peak_bytes: usize,
@@ -123,7 +126,72 @@ const EXTREMES: &[&str] = &[
     "1e400",
 ];
 
+/// A structural edit of a JSON input (most of our formats are JSON): one value somewhere in
+/// the tree replaced by an extreme number, a string, null, an empty or deep container, another
+/// value of the tree, or a key removed. Keeps the text parseable so the checks after parsing
+/// (ranges, references, limits) are what gets exercised.
+fn mutate_json(rng: &mut Rng, value: &mut serde_json::Value, dictionary: &[&str]) {
+    use serde_json::Value;
+    let node = pick(rng, value);
+    let op = rng.below(9);
+    if op == 8 {
+        if let Value::Object(o) = node {
+            if let Some(k) = o.keys().nth(rng.below(o.len().max(1))).cloned() {
+                o.remove(&k);
+            }
+        }
+        return;
+    }
+    let deep = (0..64).fold(Value::Null, |v, _| Value::Array(vec![v]));
+    *node = match op {
+        0 | 1 => {
+            let t = EXTREMES[rng.below(EXTREMES.len())];
+            serde_json::from_str(t).unwrap_or_else(|_| Value::String(t.into()))
+        }
+        2 => Value::from((rng.next() as i64) >> rng.below(64)),
+        3 => Value::from(f64::from_bits(rng.next())),
+        4 if !dictionary.is_empty() => Value::String(
+            dictionary[rng.below(dictionary.len())]
+                .trim_matches('"')
+                .into(),
+        ),
+        5 => Value::Null,
+        6 => [Value::Array(vec![]), Value::Object(Default::default())][rng.below(2)].clone(),
+        _ => deep,
+    };
+}
+
+/// A random node of the tree: each step down stops with probability 1/3.
+fn pick<'a>(rng: &mut Rng, value: &'a mut serde_json::Value) -> &'a mut serde_json::Value {
+    use serde_json::Value;
+    let len = match &*value {
+        Value::Array(a) => a.len(),
+        Value::Object(o) => o.len(),
+        _ => 0,
+    };
+    if len == 0 || rng.below(3) == 0 {
+        return value;
+    }
+    let i = rng.below(len);
+    match value {
+        Value::Array(a) => pick(rng, &mut a[i]),
+        Value::Object(o) => match o.values_mut().nth(i) {
+            Some(v) => pick(rng, v),
+            None => unreachable!("i < len"),
+        },
+        _ => unreachable!("only containers have children"),
+    }
+}
+
 fn mutate(rng: &mut Rng, input: &[u8], other: &[u8], dictionary: &[&str]) -> Vec<u8> {
+    if rng.below(2) == 0 {
+        if let Ok(mut value) = serde_json::from_slice::<serde_json::Value>(input) {
+            for _ in 0..1 + rng.below(3) {
+                mutate_json(rng, &mut value, dictionary);
+            }
+            return serde_json::to_vec(&value).unwrap_or_default();
+        }
+    }
     let mut v = input.to_vec();
     for _ in 0..1 + rng.below(4) {
         let len = v.len();
@@ -219,6 +287,9 @@ pub fn fuzz(target: &Target, corpus: &[Vec<u8>], executions: u64, seed: u64) -> 
         report.executions += 1;
         report.slowest = report.slowest.max(took);
         report.peak_bytes = report.peak_bytes.max(grew);
+        if outcome.as_ref().is_ok_and(|ok| *ok) {
+            report.accepted += 1;
+        }
         if let Err(p) = outcome {
             let what = p
                 .downcast_ref::<String>()

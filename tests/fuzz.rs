@@ -14,8 +14,12 @@ static ALLOC: engine::Counting = engine::Counting;
 
 const EXECUTIONS: u64 = 10_000;
 
+/// The allocation count is process-wide: the two tests take turns.
+static ONE_AT_A_TIME: std::sync::Mutex<()> = std::sync::Mutex::new(());
+
 #[test]
 fn no_parser_panics_hangs_or_runs_away_with_memory() {
+    let _turn = ONE_AT_A_TIME.lock().unwrap_or_else(|e| e.into_inner());
     let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("fuzz/corpus");
     let mut failures = Vec::new();
     for (i, target) in targets::TARGETS.iter().enumerate() {
@@ -27,14 +31,17 @@ fn no_parser_panics_hangs_or_runs_away_with_memory() {
         );
         let report = engine::fuzz(target, &corpus, EXECUTIONS, 0x5eed + i as u64);
         eprintln!(
-            "{}: {} inputs, slowest {:?}, most allocated at once {} KiB, {} findings",
+            "{}: {} inputs ({} accepted), slowest {:?}, most allocated at once {} KiB, {} findings",
             target.name,
             report.executions,
+            report.accepted,
             report.slowest,
             report.peak_bytes >> 10,
             report.findings.len()
         );
         assert_eq!(report.executions, EXECUTIONS);
+        // The corpus parses: mutants start from inputs that reach past the first check.
+        assert!(report.accepted > 0, "{}: nothing was accepted", target.name);
         for (finding, input) in report.findings.iter().take(3) {
             failures.push(format!(
                 "{}: {finding:?} on {:?}",
@@ -50,6 +57,7 @@ fn no_parser_panics_hangs_or_runs_away_with_memory() {
 /// that allocates far more than it is long.
 #[test]
 fn the_engine_finds_a_planted_panic_and_a_runaway_allocation() {
+    let _turn = ONE_AT_A_TIME.lock().unwrap_or_else(|e| e.into_inner());
     let planted = engine::Target {
         name: "planted",
         run: |b| {
@@ -60,6 +68,7 @@ fn the_engine_finds_a_planted_panic_and_a_runaway_allocation() {
                 let big = vec![1u8; engine::ALLOC_LIMIT + 1];
                 std::hint::black_box(&big);
             }
+            true
         },
         dictionary: &[],
         seeds: &["[1,2,3]", "{\"a\":1}"],
