@@ -80,3 +80,28 @@ fn foveated_frames_stay_whole_and_abandoned_frames_free_their_targets() {
         "{err:?}"
     );
 }
+
+#[test]
+fn stream_targets_stay_within_their_memory_budget_except_for_frames_in_flight() {
+    let mut r = renderer();
+    let one = fovea::render::FrameTargets::bytes_for(200, 150);
+    assert!(one > 200 * 150 * 100, "{one} bytes for 200x150");
+    r.set_target_memory(one * 5 / 2);
+    for stream in 1..=4 {
+        r.render(&request(Preset::Balanced, stream)).unwrap();
+        assert!(
+            r.target_bytes() <= one * 5 / 2,
+            "{} after stream {stream}",
+            r.target_bytes()
+        );
+    }
+    // A sliced frame's targets are kept even past the budget while it is in flight.
+    let mut going = match r.begin(&request(Preset::Full, 9), 3).unwrap() {
+        Progress::Going(g) => g,
+        Progress::Done(_) => panic!("not sliced"),
+    };
+    for stream in 10..14 {
+        r.render(&request(Preset::Balanced, stream)).unwrap();
+    }
+    while r.step(&mut going).unwrap().is_none() {}
+}

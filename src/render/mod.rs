@@ -40,6 +40,7 @@ pub use renderer::Renderer;
 pub use request::{FrameRequest, Inspection, RenderedFrame, DEFAULT_PUPIL_MM, MAX_SIDE, MIN_XI};
 pub use scheduler::SLICE_MS;
 pub use sliced::{bands, FrameInFlight, Progress};
+pub use targets::FrameTargets;
 pub use thread::{RenderHandle, RenderThread, Rendered};
 
 #[derive(Debug, thiserror::Error)]

@@ -17,8 +17,11 @@ use crate::foveation::rank_map;
 use crate::scene::{Plan, Scene};
 use crate::settings::Rung;
 
-/// Target sets (one per stream and size) kept alive; the oldest goes first.
-const TARGET_CACHE: usize = 8;
+/// Target sets (one per stream and size) kept alive; the oldest goes first past either limit.
+const TARGET_CACHE: usize = 32;
+/// GPU memory the target sets may take together (a 3840×2160 set is about 1.5 GB, a
+/// 640×480 one 55 MB). One set larger than this is still made, alone.
+pub const TARGET_MEMORY: u64 = 4 << 30;
 
 pub(super) type TargetKey = (u64, String, u32, u32);
 
@@ -39,6 +42,8 @@ pub struct Renderer {
     pub(super) catalog: crate::scene::Catalog,
     /// Targets of sliced frames in flight: never evicted under them.
     pub(super) pinned: Vec<TargetKey>,
+    /// GPU bytes the target sets may take together.
+    target_memory: u64,
 }
 
 /// Radiosity solves the renderer's scenes use, readable from any thread.
@@ -90,6 +95,7 @@ impl Renderer {
             solves: Solves::default(),
             catalog: crate::scene::Catalog::builtin(),
             pinned: Vec::new(),
+            target_memory: TARGET_MEMORY,
         }
     }
 
@@ -182,6 +188,16 @@ impl Renderer {
     /// How many times a photon pyramid has been built (static scenes: once per scene).
     pub fn pyramid_builds(&self) -> u64 {
         self.pyramid_builds
+    }
+
+    /// Sets how many GPU bytes the streams' target sets may take together.
+    pub fn set_target_memory(&mut self, bytes: u64) {
+        self.target_memory = bytes;
+    }
+
+    /// GPU bytes the streams' target sets take now.
+    pub fn target_bytes(&self) -> u64 {
+        self.targets.iter().map(|(_, t)| t.bytes).sum()
     }
 
     /// Frees a stream's targets and history (a session ended).
@@ -286,14 +302,20 @@ impl Renderer {
         if let Some(i) = self.targets.iter().position(|(k, _)| *k == key) {
             return Ok(i);
         }
-        // The oldest set goes first, unless a sliced frame is still using it.
-        if self.targets.len() >= TARGET_CACHE {
-            if let Some(i) = self
+        // The oldest sets go first, never one a sliced frame is still using.
+        let needed = FrameTargets::bytes_for(w, h);
+        loop {
+            let held: u64 = self.targets.iter().map(|(_, t)| t.bytes).sum();
+            let full = self.targets.len() >= TARGET_CACHE || held + needed > self.target_memory;
+            let oldest = self
                 .targets
                 .iter()
-                .position(|(k, _)| !self.pinned.contains(k))
-            {
-                self.targets.remove(i);
+                .position(|(k, _)| !self.pinned.contains(k));
+            match oldest {
+                Some(i) if full => {
+                    self.targets.remove(i);
+                }
+                _ => break,
             }
         }
         let sg = self

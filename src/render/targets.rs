@@ -48,6 +48,25 @@ pub struct FrameTargets {
     pub frame_index: u32,
     /// The scene plan at this size gives some material its subsurface rungs.
     pub needs_dipole: bool,
+    /// What these targets take on the GPU, bytes ([`FrameTargets::bytes_for`]).
+    pub bytes: u64,
+}
+
+/// The per-pixel textures: (name, format, usage).
+fn textures() -> [(&'static str, wgpu::TextureFormat, wgpu::TextureUsages); 6] {
+    let attach = U::RENDER_ATTACHMENT | U::TEXTURE_BINDING | U::COPY_SRC;
+    [
+        ("gbuffer.depth", gbuffer::DEPTH, U::RENDER_ATTACHMENT),
+        ("gbuffer.normal_distance", gbuffer::NORMAL_DISTANCE, attach),
+        ("gbuffer.albedo", gbuffer::ALBEDO, attach),
+        ("gbuffer.blurred_normal", gbuffer::BLURRED_NORMAL, attach),
+        ("gbuffer.irradiance", gbuffer::IRRADIANCE, attach),
+        (
+            "history.normal_distance",
+            gbuffer::NORMAL_DISTANCE,
+            U::TEXTURE_BINDING | U::COPY_DST,
+        ),
+    ]
 }
 
 impl FrameTargets {
@@ -64,19 +83,7 @@ impl FrameTargets {
         let size = (width, height);
         let pixels = u64::from(width) * u64::from(height);
         let mut r = shared.clone();
-        let attach = U::RENDER_ATTACHMENT | U::TEXTURE_BINDING | U::COPY_SRC;
-        for (name, format, usage) in [
-            ("gbuffer.depth", gbuffer::DEPTH, U::RENDER_ATTACHMENT),
-            ("gbuffer.normal_distance", gbuffer::NORMAL_DISTANCE, attach),
-            ("gbuffer.albedo", gbuffer::ALBEDO, attach),
-            ("gbuffer.blurred_normal", gbuffer::BLURRED_NORMAL, attach),
-            ("gbuffer.irradiance", gbuffer::IRRADIANCE, attach),
-            (
-                "history.normal_distance",
-                gbuffer::NORMAL_DISTANCE,
-                U::TEXTURE_BINDING | U::COPY_DST,
-            ),
-        ] {
+        for (name, format, usage) in textures() {
             let texture = super::gpu::texture_2d(device, name, size, format, usage);
             r.texture(name, texture);
         }
@@ -121,7 +128,18 @@ impl FrameTargets {
             has_history: false,
             frame_index: 0,
             needs_dipole,
+            bytes: FrameTargets::bytes_for(width, height),
         }
+    }
+
+    /// GPU bytes of one stream's targets at `width`×`height`: the per-pixel textures and
+    /// buffers and the readback (the small fixed buffers are left out).
+    pub fn bytes_for(width: u32, height: u32) -> u64 {
+        let texel = |f: wgpu::TextureFormat| u64::from(f.block_copy_size(None).unwrap_or(4));
+        let per_pixel: u64 = textures().iter().map(|t| texel(t.1)).sum::<u64>()
+            + PER_PIXEL.iter().map(|p| p.1).sum::<u64>()
+            + 4;
+        u64::from(width) * u64::from(height) * per_pixel
     }
 
     pub fn buffer(&self, name: &'static str) -> Result<&wgpu::Buffer, RenderError> {
