@@ -141,12 +141,9 @@ impl PassDecl {
 
 #[derive(Debug, thiserror::Error)]
 pub enum GraphError {
-    #[error("the scene's {what} need a {bytes}-byte buffer and this device allows {limit}")]
-    TooLarge {
-        what: &'static str,
-        bytes: u64,
-        limit: u64,
-    },
+    /// A scene buffer (what, bytes) past the device's `max_buffer_size`.
+    #[error("the scene's {0} need a {1}-byte buffer and this device allows {2}")]
+    TooLarge(&'static str, u64, u64),
     #[error("pass {pass}: no resource named {name:?}")]
     Missing {
         pass: &'static str,

@@ -131,11 +131,7 @@ pub fn fits_the_device(scene: &Scene, limits: &wgpu::Limits) -> Result<(), Graph
     ];
     for (what, bytes) in needs {
         if bytes > limits.max_buffer_size {
-            return Err(GraphError::TooLarge {
-                what,
-                bytes,
-                limit: limits.max_buffer_size,
-            });
+            return Err(GraphError::TooLarge(what, bytes, limits.max_buffer_size));
         }
     }
     Ok(())
