@@ -90,3 +90,61 @@ async fn past_the_pending_cap_newcomers_wait_and_are_served_when_room_comes() {
     assert!(answer.starts_with("HTTP/1.1 200"), "{answer}");
     server.stop().await;
 }
+
+/// SIGTERM's path with a client that never reads: its frames pile up unsent, yet the server
+/// exits within the drain's grace (plus the wait for close frames), and the recording holds
+/// every gaze sample the client sent.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn a_drain_ends_on_time_with_a_client_that_never_reads_and_keeps_its_gaze() {
+    use fovea::client::Client;
+    use fovea::protocol::{Gaze, Hello};
+    let dir = std::env::temp_dir().join(format!("fovea-blocked-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    let grace = Duration::from_millis(1500);
+    let (addr, server) = common::start(ServerOptions {
+        drain: grace,
+        record_dir: Some(dir.clone()),
+        ..ServerOptions::default()
+    })
+    .await;
+    let mut c = Client::connect(&format!("ws://{addr}/ws")).await.unwrap();
+    c.hello(&Hello {
+        width: 640,
+        height: 480,
+        codec: fovea::protocol::Codec::Png,
+        max_in_flight: 8,
+        ..Hello::default()
+    })
+    .await
+    .unwrap();
+    // Gaze for two seconds, never reading: PNG frames fill the socket's buffers.
+    let sent = 400u64;
+    for seq in 1..=sent {
+        let x = 0.2 + 0.6 * (seq % 50) as f64 / 50.0;
+        let g = Gaze {
+            seq,
+            t_ms: seq as f64 * 5.0,
+            x,
+            y: 0.5,
+            pupil_mm: None,
+        };
+        c.gaze(&g).await.unwrap();
+        tokio::time::sleep(Duration::from_millis(5)).await;
+    }
+    let began = Instant::now();
+    server.stop().await;
+    let took = began.elapsed();
+    assert!(
+        took <= grace + Duration::from_secs(4),
+        "the server took {took:?} to stop with a {grace:?} drain"
+    );
+    let run = common::run_folder(&dir);
+    let text = std::fs::read_to_string(run.join("session-1.csv")).unwrap();
+    assert_eq!(
+        text.lines().count() as u64,
+        sent + 1,
+        "header and every sample"
+    );
+    drop(c);
+    let _ = std::fs::remove_dir_all(&dir);
+}
