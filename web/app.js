@@ -143,6 +143,14 @@ function onText(text) {
   } else if (msg.type === 'error') {
     state.errors.push(msg);
     console.warn(`server error ${msg.code}: ${msg.message}`);
+    // A refused hello is followed by no_hello replies to the settings sent behind it: they
+    // would hide the refusal, which is what the viewer needs to read.
+    if (msg.code === 'no_hello' && !state.welcome) return;
+    if (msg.code === 'over_budget' && !state.welcome) {
+      setStatus('refused: over the frame budget', 'waiting');
+      showBanner(`server: ${msg.message}`, 'error');
+      return;
+    }
     showBanner(`server: ${msg.message}`, 'error', 8000);
   }
 }

@@ -352,3 +352,33 @@ async fn a_served_gltf_scene_is_offered_and_dragging_turns_its_camera() {
     drop(page);
     f.finish();
 }
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn a_hello_over_the_frame_budget_is_shown_with_the_size_that_fits() {
+    // A budget no frame meets on a software adapter (0.1 s, the least the flag takes): the
+    // page's hello is refused, and the page says why.
+    let f = Fixture::start(&["--frame-budget-s", "0.1"]).await;
+    let page = f
+        .browser
+        .new_page(f.server.url.as_str())
+        .await
+        .expect("page opens");
+    let text = wait_for(
+        &page,
+        "(() => { const t = document.getElementById('banner').textContent; return /over the per-frame budget/.test(t) && t; })()",
+        30,
+    )
+    .await;
+    assert!(text.as_str().unwrap_or("").contains("estimated"), "{text}");
+    let status = eval(&page, "document.getElementById('status').textContent").await;
+    assert!(
+        status
+            .as_str()
+            .unwrap_or("")
+            .contains("over the frame budget"),
+        "{status}"
+    );
+    screenshot(&page, "over-budget").await;
+    drop(page);
+    f.finish();
+}
