@@ -113,7 +113,8 @@ enum Command {
     /// Neon gaze.csv, Tobii-style (device_time_stamp, gaze_point_x, gaze_point_y,
     /// pupil_diameter), and generic CSV (t_ms, x, y, pupil_mm; see --time-col and friends).
     /// Track loss, blinks and samples far off the frame are not sent: the server keeps the last
-    /// valid gaze. Writes DIR/frames.csv, DIR/summary.json and, with --save-frames, the images.
+    /// valid gaze. Writes DIR/frames.csv, DIR/summary.json and, with --save-frames, the images;
+    /// Ctrl-C stops early and writes what came so far (summary.json says "interrupted").
     Replay(ReplayArgs),
     /// Evaluate gaze prediction on a recording: angular error at several horizons, holding the
     /// last sample vs predicting, for fixation and saccade samples.

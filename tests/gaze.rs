@@ -45,6 +45,7 @@ fn options(url: &str) -> ReplayOptions {
         duration_ms: None,
         loops: 1,
         keep_images: false,
+        stop: Default::default(),
     }
 }
 
@@ -267,4 +268,52 @@ async fn send_still_gaze(c: &mut fovea::client::Client, n: u64, pupil_mm: Option
         };
         c.gaze(&g).await.unwrap();
     }
+}
+
+/// Ctrl-C mid-replay: the replay stops sending, collects what is in flight and still writes
+/// frames.csv and summary.json, marked interrupted.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn ctrl_c_mid_replay_leaves_complete_outputs() {
+    let (url, shutdown) = server(None).await;
+    let out = std::env::temp_dir().join(format!("fovea-interrupted-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&out);
+    let recording = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("assets/gaze/eyelink_500hz_1920x1200.csv");
+    let mut child = std::process::Command::new(env!("CARGO_BIN_EXE_fovea"))
+        .arg("replay")
+        .arg(&recording)
+        .args(["--screen", "1920x1200", "--url", &url, "--scene", "bunny"])
+        .args(["--size", "96x64", "--preset", "fast", "--out"])
+        .arg(&out)
+        .stdout(std::process::Stdio::null())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    // Let frames come for a while (the recording runs for minutes), then interrupt.
+    tokio::time::sleep(std::time::Duration::from_secs(4)).await;
+    // SAFETY: sending a signal to our own child process.
+    assert_eq!(unsafe { libc::kill(child.id() as i32, libc::SIGINT) }, 0);
+    let status = tokio::task::spawn_blocking(move || child.wait_with_output())
+        .await
+        .unwrap()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&status.stderr);
+    assert!(status.status.success(), "{stderr}");
+    assert!(stderr.contains("interrupted"), "{stderr}");
+    let summary: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
+    assert_eq!(summary["interrupted"], true, "{summary}");
+    let sent = summary["samples_sent"].as_u64().unwrap();
+    let total = summary["samples_in_selection"].as_u64().unwrap();
+    assert!(sent > 0 && sent < total, "{sent} of {total}");
+    let csv = std::fs::read_to_string(out.join("frames.csv")).unwrap();
+    let rows = csv.lines().count() - 1;
+    assert_eq!(
+        rows as u64,
+        summary["frames"].as_u64().unwrap(),
+        "{summary}"
+    );
+    assert!(rows > 0);
+    let _ = std::fs::remove_dir_all(&out);
+    shutdown.stop().await;
 }

@@ -157,8 +157,17 @@ pub fn replay(a: ReplayArgs) -> Result<()> {
         duration_ms: a.duration.map(|d| d * 1e3),
         loops: a.loops,
         keep_images: a.save_frames,
+        stop: tokio_util::sync::CancellationToken::new(),
     };
     let runtime = tokio::runtime::Runtime::new()?;
+    // Ctrl-C ends the replay early with its outputs written: the frames so far are data.
+    let stop = opts.stop.clone();
+    runtime.spawn(async move {
+        if tokio::signal::ctrl_c().await.is_ok() {
+            eprintln!("\ninterrupted: collecting the frames in flight and writing what came");
+            stop.cancel();
+        }
+    });
     let started = std::time::Instant::now();
     let (frames, summary) = runtime.block_on(fovea::client::replay::replay(
         &rec.samples,

@@ -31,6 +31,9 @@ pub struct ReplayOptions {
     pub loops: u32,
     /// Keep the encoded images of received frames.
     pub keep_images: bool,
+    /// Cancelled to stop early (Ctrl-C): sending stops, the frames in flight are collected and
+    /// the replay returns what it has, marked `interrupted`.
+    pub stop: tokio_util::sync::CancellationToken,
 }
 
 /// One frame as the client saw it.
@@ -80,6 +83,8 @@ pub struct ReplaySummary {
     pub reconnect_gaps_ms: Vec<f64>,
     /// Why the replay stopped early, if it did.
     pub ended_early: Option<String>,
+    /// Stopped by the user (Ctrl-C) before the selection was sent.
+    pub interrupted: bool,
     /// Received but answered by no frame: coalesced into a newer sample (expected: many).
     pub samples_coalesced: u64,
     pub latency_p50_ms: f64,
@@ -235,7 +240,7 @@ pub async fn replay(
     let mut sent_count = 0usize;
     let mut unsendable = 0usize;
     let mut seq = 0u64;
-    pace(start, &plan, |index, _| {
+    let sending = pace(start, &plan, |index, _| {
         seq += 1;
         let s = &samples[index];
         let Some([x, y]) = sendable(s) else {
@@ -258,11 +263,15 @@ pub async fn replay(
             progress(sent_count + unsendable, total);
         }
         ok
-    })
-    .await;
-    progress(total, total);
+    });
+    let interrupted = tokio::select! {
+        _ = sending => false,
+        _ = opts.stop.cancelled() => true,
+    };
+    progress(sent_count + unsendable, total);
     // Let the last frames arrive, then close; the reader ends when the server closes too.
-    tokio::time::sleep(Duration::from_millis(1500)).await;
+    let linger = if interrupted { 500 } else { 1500 };
+    tokio::time::sleep(Duration::from_millis(linger)).await;
     let link = link.close().await;
     let frames = tokio::time::timeout(Duration::from_secs(10), reader)
         .await
@@ -294,6 +303,7 @@ pub async fn replay(
         reconnects: link.reconnects,
         reconnect_gaps_ms: link.gaps_ms.clone(),
         ended_early: link.ended.clone(),
+        interrupted,
         samples_coalesced: server_samples.saturating_sub(answered),
         latency_p50_ms: percentile(&mut latencies, 0.5),
         latency_p95_ms: percentile(&mut latencies, 0.95),
