@@ -279,7 +279,7 @@ async fn ctrl_c_mid_replay_leaves_complete_outputs() {
     let _ = std::fs::remove_dir_all(&out);
     let recording = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
         .join("assets/gaze/eyelink_500hz_1920x1200.csv");
-    let mut child = std::process::Command::new(env!("CARGO_BIN_EXE_fovea"))
+    let child = std::process::Command::new(env!("CARGO_BIN_EXE_fovea"))
         .arg("replay")
         .arg(&recording)
         .args(["--screen", "1920x1200", "--url", &url, "--scene", "bunny"])
