@@ -24,53 +24,6 @@ fn hello(w: u32, h: u32, preset: &str) -> Hello {
     }
 }
 
-/// Drives a session for `span` like a viewer (a moving gaze, every frame acknowledged) and
-/// returns the intervals between its frames, in ms.
-async fn frame_intervals(c: &mut Client, span: Duration) -> Vec<f64> {
-    let start = Instant::now();
-    let mut last: Option<Instant> = None;
-    let mut intervals = Vec::new();
-    let mut t_ms = 0.0;
-    while start.elapsed() < span {
-        t_ms += 10.0;
-        let x = 0.3 + 0.4 * (t_ms / 700.0f64).sin().abs();
-        c.gaze(&Gaze {
-            seq: t_ms as u64,
-            t_ms,
-            x,
-            y: 0.5,
-            pupil_mm: None,
-        })
-        .await
-        .unwrap();
-        match c.next_event(WAIT).await.unwrap() {
-            Event::Frame { header, .. } => {
-                let now = Instant::now();
-                if let Some(l) = last {
-                    intervals.push((now - l).as_secs_f64() * 1e3);
-                }
-                last = Some(now);
-                c.ack(&Ack {
-                    frame: header.frame,
-                    t_ms: None,
-                    dropped: false,
-                })
-                .await
-                .unwrap();
-            }
-            Event::Error(e) => panic!("{e:?}"),
-            other => panic!("unexpected {other:?}"),
-        }
-    }
-    intervals
-}
-
-fn median(mut v: Vec<f64>) -> f64 {
-    assert!(!v.is_empty());
-    v.sort_by(f64::total_cmp);
-    v[v.len() / 2]
-}
-
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn a_reference_4k_session_slows_only_itself() {
     let options = ServerOptions {
@@ -83,15 +36,15 @@ async fn a_reference_4k_session_slows_only_itself() {
     let welcome = light.hello(&hello(320, 240, "balanced")).await.unwrap();
     let slice_ms = welcome.limits.slice_ms;
     assert!(slice_ms > 0.0, "welcome states the slice length");
-    let alone = median(frame_intervals(&mut light, Duration::from_secs(3)).await);
+    let alone = common::median(common::frame_intervals(&mut light, Duration::from_secs(3)).await);
 
     let mut heavy = Client::connect(&url).await.unwrap();
     heavy.hello(&hello(3840, 2160, "reference")).await.unwrap();
     tokio::time::sleep(Duration::from_millis(500)).await;
     let began = Instant::now();
-    let with = frame_intervals(&mut light, Duration::from_secs(4)).await;
+    let with = common::frame_intervals(&mut light, Duration::from_secs(4)).await;
     let frames = with.len();
-    let with = median(with);
+    let with = common::median(with);
     // The heavy frame is still being rendered: nothing arrived for it meanwhile.
     let heavy_done = matches!(
         heavy.next_event(Duration::from_millis(10)).await,

@@ -7,11 +7,10 @@ mod common;
 
 use std::time::{Duration, Instant};
 
-use fovea::client::{Client, Event};
-use fovea::protocol::{Ack, Gaze, Hello};
+use fovea::client::Client;
+use fovea::protocol::Hello;
 use fovea::server::ServerOptions;
 
-const WAIT: Duration = Duration::from_secs(60);
 /// How much slower the other session's frames may come during the storm.
 const FACTOR: f64 = 3.0;
 
@@ -23,41 +22,6 @@ fn rss_bytes() -> u64 {
         .and_then(|p| p.parse().ok())
         .unwrap_or(0);
     pages * 4096
-}
-
-async fn intervals(c: &mut Client, span: Duration) -> Vec<f64> {
-    let start = Instant::now();
-    let (mut last, mut out, mut seq) = (None::<Instant>, Vec::new(), 0u64);
-    while start.elapsed() < span {
-        seq += 1;
-        let x = 0.3 + 0.4 * ((seq as f64) / 20.0).sin().abs();
-        let g = Gaze {
-            seq,
-            t_ms: seq as f64 * 10.0,
-            x,
-            y: 0.5,
-            pupil_mm: None,
-        };
-        c.gaze(&g).await.unwrap();
-        match c.next_event(WAIT).await.unwrap() {
-            Event::Frame { header, .. } => {
-                let now = Instant::now();
-                if let Some(l) = last {
-                    out.push((now - l).as_secs_f64() * 1e3);
-                }
-                last = Some(now);
-                c.ack(&Ack {
-                    frame: header.frame,
-                    t_ms: None,
-                    dropped: false,
-                })
-                .await
-                .unwrap();
-            }
-            other => panic!("unexpected {other:?}"),
-        }
-    }
-    out
 }
 
 /// `n` sockets, alternately 4K foveated and 720p full-shading hellos, each gone 50 ms after
@@ -83,11 +47,6 @@ async fn storm(url: String, n: usize) -> usize {
     sent
 }
 
-fn median(mut v: Vec<f64>) -> f64 {
-    v.sort_by(f64::total_cmp);
-    v[v.len() / 2]
-}
-
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn an_orphan_storm_leaves_other_sessions_and_memory_as_they_were() {
     let (addr, server) = common::start_calibrated(ServerOptions::default()).await;
@@ -101,7 +60,7 @@ async fn an_orphan_storm_leaves_other_sessions_and_memory_as_they_were() {
         })
         .await
         .unwrap();
-    let alone = median(intervals(&mut victim, Duration::from_secs(3)).await);
+    let alone = common::median(common::frame_intervals(&mut victim, Duration::from_secs(3)).await);
 
     // A small storm first, so what any first 720p frame builds once (pipelines, the
     // allocator's pools) is in the baseline; then the storm, beside the other session.
@@ -109,7 +68,7 @@ async fn an_orphan_storm_leaves_other_sessions_and_memory_as_they_were() {
     tokio::time::sleep(Duration::from_secs(1)).await;
     let rss_before = rss_bytes();
     let storm = tokio::spawn(storm(url.clone(), 40));
-    let during = median(intervals(&mut victim, Duration::from_secs(4)).await);
+    let during = common::median(common::frame_intervals(&mut victim, Duration::from_secs(4)).await);
     let sent = storm.await.unwrap();
     let ended = Instant::now();
     let mut rss_after = rss_bytes();

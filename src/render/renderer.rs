@@ -230,11 +230,8 @@ impl Renderer {
         let sg = self
             .scenes
             .get_mut(&req.scene)
-            .ok_or_else(|| RenderError::Gpu(format!("scene {} is not loaded", req.scene)))?;
-        let to_light = req
-            .to_light
-            .and_then(|l| l.try_normalize())
-            .unwrap_or_else(|| sg.scene.file.light.to_light_at(req.time_s));
+            .ok_or_else(|| not_loaded(&req.scene))?;
+        let to_light = req.light_direction(&sg.scene);
         upload_radiosity(&self.gpu.queue, sg);
         let inputs = PhotonInputs {
             to_light,
@@ -291,6 +288,11 @@ impl Renderer {
         Ok((enc.map(wgpu::CommandEncoder::finish), inputs))
     }
 
+    /// A loaded scene's GPU side.
+    pub(super) fn loaded(&self, scene: &str) -> Result<&SceneGpu, RenderError> {
+        self.scenes.get(scene).ok_or_else(|| not_loaded(scene))
+    }
+
     pub(super) fn target_index(
         &mut self,
         stream: u64,
@@ -318,10 +320,7 @@ impl Renderer {
                 _ => break,
             }
         }
-        let sg = self
-            .scenes
-            .get(scene)
-            .ok_or_else(|| RenderError::Gpu(format!("scene {scene} is not loaded")))?;
+        let sg = self.loaded(scene)?;
         let plan = Plan::of(&sg.scene, w, h);
         let materials = super::materials::upload(
             &self.gpu.device,
@@ -334,4 +333,8 @@ impl Renderer {
         self.targets.push((key, t));
         Ok(self.targets.len() - 1)
     }
+}
+
+pub(super) fn not_loaded(scene: &str) -> RenderError {
+    RenderError::Gpu(format!("scene {scene} is not loaded"))
 }

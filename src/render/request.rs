@@ -40,6 +40,14 @@ pub struct FrameRequest {
 }
 
 impl FrameRequest {
+    /// Unit vector towards the key light for this frame: the request's override, or the
+    /// scene's light at the request's time (animated lights orbit).
+    pub fn light_direction(&self, scene: &crate::scene::Scene) -> Vec3 {
+        self.to_light
+            .and_then(|l| l.try_normalize())
+            .unwrap_or_else(|| scene.file.light.to_light_at(self.time_s))
+    }
+
     pub fn new(scene: &str, width: u32, height: u32) -> FrameRequest {
         FrameRequest {
             scene: scene.to_string(),

@@ -18,9 +18,9 @@ use super::frame_uniform::frame_uniform;
 use super::graph::Recorder;
 use super::pass::photons::PhotonInputs;
 use super::pass::shade;
-use super::renderer::{Renderer, TargetKey};
+use super::renderer::{not_loaded, Renderer, TargetKey};
 use super::request::{FrameRequest, RenderedFrame, MAX_SIDE};
-use super::uniforms::FIELDS;
+use super::uniforms::FrameUniform;
 use super::RenderError;
 
 /// Where a frame stands after [`Renderer::begin`] or [`Renderer::step`].
@@ -93,7 +93,7 @@ impl Renderer {
         let submission = self.submit(req, ti, part, photon_encoder)?;
         let render_ms = started.elapsed().as_secs_f64() * 1e3;
         let passes_ms = self.timer.read(&self.gpu.device, submission)?;
-        let going = FrameInFlight {
+        let mut going = FrameInFlight {
             req: req.clone(),
             key: key.clone(),
             bands: if sliced { bands(h, slices) } else { Vec::new() },
@@ -105,7 +105,7 @@ impl Renderer {
             self.pinned.push(key);
             return Ok(Progress::Going(Box::new(going)));
         }
-        self.finish(going, ti).map(Progress::Done)
+        self.finish(&mut going, ti).map(Progress::Done)
     }
 
     /// Runs a sliced frame's next part; the last one returns the frame.
@@ -133,17 +133,8 @@ impl Renderer {
         if !matches!(part, Part::Suffix) {
             return Ok(None);
         }
-        let key = f.key.clone();
-        self.pinned.retain(|k| *k != key);
-        let done = FrameInFlight {
-            req: f.req.clone(),
-            key,
-            bands: Vec::new(),
-            to_light: f.to_light,
-            render_ms: f.render_ms,
-            passes_ms: std::mem::take(&mut f.passes_ms),
-        };
-        self.finish(done, ti).map(Some)
+        self.pinned.retain(|k| *k != f.key);
+        self.finish(f, ti).map(Some)
     }
 
     /// Lets go of a sliced frame nobody wants any more (its session left).
@@ -157,14 +148,8 @@ impl Renderer {
         if req.scene != f.req.scene {
             return false;
         }
-        let Some(sg) = self.scenes.get(&req.scene) else {
-            return false;
-        };
-        let to_light = req
-            .to_light
-            .and_then(|l| l.try_normalize())
-            .unwrap_or_else(|| sg.scene.file.light.to_light_at(req.time_s));
-        to_light != f.to_light
+        self.loaded(&req.scene)
+            .is_ok_and(|sg| req.light_direction(&sg.scene) != f.to_light)
     }
 
     fn write_uniform(
@@ -173,10 +158,7 @@ impl Renderer {
         ti: usize,
         inputs: PhotonInputs,
     ) -> Result<(), RenderError> {
-        let sg = self
-            .scenes
-            .get(&req.scene)
-            .ok_or_else(|| RenderError::Gpu(format!("scene {} is not loaded", req.scene)))?;
+        let sg = self.loaded(&req.scene)?;
         let pyramid_ready = sg
             .photons
             .as_ref()
@@ -211,17 +193,15 @@ impl Renderer {
         part: Part,
         photon_encoder: Option<wgpu::CommandBuffer>,
     ) -> Result<wgpu::SubmissionIndex, RenderError> {
+        // Field by field: the targets, pipelines and timer are borrowed mutably below.
         let sg = self
             .scenes
             .get(&req.scene)
-            .ok_or_else(|| RenderError::Gpu(format!("scene {} is not loaded", req.scene)))?;
+            .ok_or_else(|| not_loaded(&req.scene))?;
         let (device, queue) = (&self.gpu.device, &self.gpu.queue);
         let t = &mut self.targets[ti].1;
         if let Part::Rows(a, b) = part {
-            let offset = FIELDS
-                .iter()
-                .find(|(name, _)| *name == "shade_rows")
-                .map_or(0, |(_, o)| *o as u64);
+            let offset = std::mem::offset_of!(FrameUniform, shade_rows) as u64;
             let buffer = t.buffer("frame.uniform")?;
             queue.write_buffer(buffer, offset, bytemuck::cast_slice(&[a, b]));
         }
@@ -274,7 +254,7 @@ impl Renderer {
     }
 
     /// Reads the finished frame back.
-    fn finish(&mut self, f: FrameInFlight, ti: usize) -> Result<RenderedFrame, RenderError> {
+    fn finish(&mut self, f: &mut FrameInFlight, ti: usize) -> Result<RenderedFrame, RenderError> {
         let (w, h) = (f.req.width, f.req.height);
         let started = Instant::now();
         let t = &self.targets[ti].1;
@@ -292,7 +272,7 @@ impl Renderer {
             sampled,
             render_ms: f.render_ms,
             readback_ms,
-            passes_ms: f.passes_ms,
+            passes_ms: std::mem::take(&mut f.passes_ms),
             radiosity: self.scenes.get(&f.req.scene).and_then(|s| s.gi),
         })
     }

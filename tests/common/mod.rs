@@ -108,3 +108,47 @@ pub fn run_folder(record_dir: &std::path::Path) -> std::path::PathBuf {
     );
     runs[0].clone()
 }
+
+/// Drives a session for `span` like a viewer (a moving gaze, every frame acknowledged) and
+/// returns the intervals between its frames, in ms.
+pub async fn frame_intervals(c: &mut fovea::client::Client, span: Duration) -> Vec<f64> {
+    use fovea::client::Event;
+    use fovea::protocol::{Ack, Gaze};
+    let start = std::time::Instant::now();
+    let (mut last, mut out, mut seq) = (None::<std::time::Instant>, Vec::new(), 0u64);
+    while start.elapsed() < span {
+        seq += 1;
+        let x = 0.3 + 0.4 * ((seq as f64) / 70.0).sin().abs();
+        let g = Gaze {
+            seq,
+            t_ms: seq as f64 * 10.0,
+            x,
+            y: 0.5,
+            pupil_mm: None,
+        };
+        c.gaze(&g).await.unwrap();
+        match c.next_event(Duration::from_secs(60)).await.unwrap() {
+            Event::Frame { header, .. } => {
+                let now = std::time::Instant::now();
+                if let Some(l) = last {
+                    out.push((now - l).as_secs_f64() * 1e3);
+                }
+                last = Some(now);
+                let ack = Ack {
+                    frame: header.frame,
+                    t_ms: None,
+                    dropped: false,
+                };
+                c.ack(&ack).await.unwrap();
+            }
+            other => panic!("unexpected {other:?}"),
+        }
+    }
+    out
+}
+
+pub fn median(mut v: Vec<f64>) -> f64 {
+    assert!(!v.is_empty(), "no intervals");
+    v.sort_by(f64::total_cmp);
+    v[v.len() / 2]
+}
