@@ -44,6 +44,10 @@ pub struct Scheduler {
     tasks: Vec<Task>,
     arrivals: u64,
     health: Health,
+    /// (stream, scene, width, height) that have rendered a frame: a stream's first frame at a
+    /// size makes its targets and may compile pipelines or build the scene's maps, seconds on
+    /// a cold software driver, so it teaches the cost model nothing about the next ones.
+    warm: std::collections::HashSet<(u64, String, u32, u32)>,
 }
 
 impl Scheduler {
@@ -55,6 +59,7 @@ impl Scheduler {
             tasks: Vec::new(),
             arrivals: 0,
             health,
+            warm: Default::default(),
         }
     }
 
@@ -92,6 +97,7 @@ impl Scheduler {
             }
             Job::Release(stream) => {
                 self.turns.forget(stream);
+                self.warm.retain(|k| k.0 != stream);
                 let before = self.tasks.len();
                 self.tasks.retain(|t| t.request.stream != stream);
                 let dropped = (before - self.tasks.len()) as u64;
@@ -203,7 +209,13 @@ impl Scheduler {
         let mut restart = false;
         let result = match outcome {
             Ok(Some(frame)) => {
-                self.cost.record(&task.request, spent);
+                let r = &task.request;
+                if !self
+                    .warm
+                    .insert((r.stream, r.scene.clone(), r.width, r.height))
+                {
+                    self.cost.record(r, spent);
+                }
                 self.health.frame_ok();
                 Ok(Rendered { frame, started })
             }
