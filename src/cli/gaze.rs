@@ -1,8 +1,8 @@
 //! `fovea replay` and `fovea gaze`: recordings in, frames or prediction errors out.
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
-use anyhow::{Context, Result};
+use anyhow::{bail, Context, Result};
 
 use super::parse::parse_size;
 use super::target::url_is_allowed;
@@ -14,6 +14,13 @@ pub struct RecordingArgs {
     /// Screen size WxH in pixels, for formats in pixels (EyeLink, Neon, generic --pixels).
     #[arg(long)]
     pub screen: Option<String>,
+    #[command(flatten)]
+    pub read: ReadArgs,
+}
+
+/// How to read a recording's file, whichever command reads it.
+#[derive(clap::Args, Clone)]
+pub struct ReadArgs {
     /// Recording format (default: detected from the header).
     #[arg(long, value_enum)]
     pub format: Option<fovea::gaze::formats::Format>,
@@ -40,14 +47,35 @@ pub struct RecordingArgs {
     pub pixels: bool,
 }
 
+impl Default for ReadArgs {
+    fn default() -> Self {
+        ReadArgs {
+            format: None,
+            pupil_median_mm: 4.0,
+            time_col: "t_ms".into(),
+            x_col: "x".into(),
+            y_col: "y".into(),
+            pupil_col: "pupil_mm".into(),
+            time_unit: "ms".into(),
+            pixels: false,
+        }
+    }
+}
+
 impl RecordingArgs {
     pub fn load(&self) -> Result<fovea::gaze::formats::Recording> {
+        self.read.load(&self.file, self.screen.as_deref())
+    }
+}
+
+impl ReadArgs {
+    pub fn load(&self, file: &Path, screen: Option<&str>) -> Result<fovea::gaze::formats::Recording> {
         // An hour at 2000 Hz is ~300 MB of CSV; more is not a recording (or is /dev/zero).
-        let bytes = fovea::scene::limits::read_capped(&self.file, 1 << 30)
-            .with_context(|| format!("reading {}", self.file.display()))?;
+        let bytes = fovea::scene::limits::read_capped(file, 1 << 30)
+            .with_context(|| format!("reading {}", file.display()))?;
         let text = String::from_utf8(bytes)
-            .with_context(|| format!("{} is not UTF-8 text", self.file.display()))?;
-        let screen = self.screen.as_deref().map(parse_size).transpose()?;
+            .with_context(|| format!("{} is not UTF-8 text", file.display()))?;
+        let screen = screen.map(parse_size).transpose()?;
         let opts = fovea::gaze::formats::ParseOptions {
             format: self.format,
             screen,
@@ -63,12 +91,12 @@ impl RecordingArgs {
             ..Default::default()
         };
         let rec = fovea::gaze::formats::parse(&text, &opts)
-            .with_context(|| format!("parsing {}", self.file.display()))?;
+            .with_context(|| format!("parsing {}", file.display()))?;
         let lost = rec.samples.iter().filter(|s| s.xy.is_none()).count();
         let span = rec.samples.last().map(|s| s.t_ms / 1e3).unwrap_or(0.0);
         eprintln!(
             "{}: {:?}, {} samples over {span:.1} s, {lost} without gaze (track loss or blink)",
-            self.file.display(),
+            file.display(),
             rec.format,
             rec.samples.len()
         );
@@ -123,8 +151,15 @@ pub struct ReplayArgs {
 
 #[derive(clap::Args)]
 pub struct GazeArgs {
+    /// The recordings: each is scored alone, then all pooled.
+    #[arg(required = true)]
+    pub files: Vec<PathBuf>,
+    /// Screen size WxH in pixels for formats in pixels: once for every file, or once per file
+    /// in the files' order.
+    #[arg(long = "screen")]
+    pub screens: Vec<String>,
     #[command(flatten)]
-    pub recording: RecordingArgs,
+    pub read: ReadArgs,
     /// Prediction horizons, ms.
     #[arg(long, default_value = "10,20,30,50")]
     pub horizons: String,
@@ -134,7 +169,8 @@ pub struct GazeArgs {
     /// Viewing distance the recording was made at, cm.
     #[arg(long, default_value_t = 60.0)]
     pub distance_cm: f64,
-    /// Also write the table (gaze.md) and the error-vs-horizon plot (gaze.svg, gaze.png) here.
+    /// Also write the tables (gaze.md, gaze.json) and the error-vs-horizon plots
+    /// (gaze-<recording>.svg/png and gaze-pooled.svg/png) here.
     #[arg(long)]
     pub out: Option<PathBuf>,
 }
@@ -205,42 +241,72 @@ pub fn replay(a: ReplayArgs) -> Result<()> {
 }
 
 pub fn gaze(a: GazeArgs) -> Result<()> {
-    let rec = a.recording.load()?;
-    let (w, h) = a
-        .recording
-        .screen
-        .as_deref()
-        .map(parse_size)
-        .transpose()?
-        .unwrap_or((1920, 1080));
-    let display = fovea::viewing::Display {
-        width_cm: a.display_width_cm,
-        distance_cm: a.distance_cm,
-    };
-    let viewing = fovea::viewing::Viewing::new(display, w, h);
+    if a.screens.len() > 1 && a.screens.len() != a.files.len() {
+        bail!(
+            "--screen: give one for every file or one per file ({} files, {} screens)",
+            a.files.len(),
+            a.screens.len()
+        );
+    }
     let horizons: Vec<f64> = a
         .horizons
         .split(',')
-        .map(|s| s.trim().parse::<f64>())
-        .collect::<Result<_, _>>()
-        .context("--horizons: numbers in ms")?;
-    let rows = fovea::gaze::evaluate::evaluate(&rec.samples, &viewing, &horizons);
-    let table = fovea::gaze::evaluate::markdown(&rows);
-    println!("{table}");
+        .map(|s| super::parse::number_in(s.trim(), 0.0, 1000.0).map_err(anyhow::Error::msg))
+        .collect::<Result<_>>()
+        .context("--horizons: numbers of ms from 0 to 1000, like 10,20,30,50")?;
+    let mut pooled = fovea::gaze::evaluate::Errors::default();
+    let mut report = String::new();
+    let mut tables = serde_json::Map::new();
+    let mut plots = Vec::new();
+    for (i, file) in a.files.iter().enumerate() {
+        let screen = a.screens.get(i).or(a.screens.first()).map(String::as_str);
+        let rec = a.read.load(file, screen)?;
+        let (w, h) = screen.map(parse_size).transpose()?.unwrap_or((1920, 1080));
+        let display = fovea::viewing::Display {
+            width_cm: a.display_width_cm,
+            distance_cm: a.distance_cm,
+        };
+        let viewing = fovea::viewing::Viewing::new(display, w, h);
+        let errors = fovea::gaze::evaluate::errors(
+            &rec.samples,
+            rec.saccades.as_deref(),
+            &viewing,
+            &horizons,
+            fovea::gaze::prediction::Tuning::default(),
+        );
+        pooled.pool(&errors);
+        let name = file
+            .file_stem()
+            .map(|n| n.to_string_lossy().into_owned())
+            .unwrap_or_else(|| format!("recording-{i}"));
+        plots.push((name, errors.summary()));
+    }
+    if a.files.len() > 1 {
+        plots.push(("pooled".to_string(), pooled.summary()));
+    }
+    for (name, rows) in &plots {
+        report.push_str(&format!(
+            "## {name}\n\n{}\n",
+            fovea::gaze::evaluate::markdown(rows)
+        ));
+        tables.insert(name.clone(), serde_json::to_value(rows)?);
+    }
+    println!("{report}");
     if let Some(dir) = &a.out {
         std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
-        std::fs::write(dir.join("gaze.md"), &table)?;
-        let name = a
-            .recording
-            .file
-            .file_name()
-            .map(|n| n.to_string_lossy().into_owned());
-        let title = format!("Gaze prediction error: {}", name.unwrap_or_default());
-        fovea::plot::write(
-            &fovea::plot::gaze::GazePlot { title, rows },
-            &dir.join("gaze"),
+        std::fs::write(dir.join("gaze.md"), &report)?;
+        std::fs::write(
+            dir.join("gaze.json"),
+            serde_json::to_string_pretty(&tables)?,
         )?;
-        eprintln!("wrote {0}/gaze.md, gaze.svg and gaze.png", dir.display());
+        for (name, rows) in plots {
+            let title = format!("Gaze prediction error: {name}");
+            fovea::plot::write(
+                &fovea::plot::gaze::GazePlot { title, rows },
+                &dir.join(format!("gaze-{name}")),
+            )?;
+        }
+        eprintln!("wrote {0}/gaze.md, gaze.json and gaze-*.svg/png", dir.display());
     }
     Ok(())
 }

@@ -4,7 +4,7 @@ use std::path::PathBuf;
 
 use anyhow::{bail, Context, Result};
 
-use super::gaze::RecordingArgs;
+use super::gaze::ReadArgs;
 use super::target::url_is_allowed;
 
 #[derive(clap::Args)]
@@ -67,19 +67,10 @@ pub fn load(a: LoadArgs) -> Result<()> {
     let url = url_is_allowed(&a.url, &a.allow_host)?;
     let recording = match &a.recording {
         Some(file) => {
-            let args = RecordingArgs {
-                file: file.clone(),
-                screen: a.screen.clone(),
-                format: None,
-                pupil_median_mm: 4.0,
-                time_col: "t_ms".into(),
-                x_col: "x".into(),
-                y_col: "y".into(),
-                pupil_col: "pupil_mm".into(),
-                time_unit: "ms".into(),
-                pixels: false,
-            };
-            Some(std::sync::Arc::new(args.load()?.samples))
+            let read = ReadArgs::default();
+            Some(std::sync::Arc::new(
+                read.load(file, a.screen.as_deref())?.samples,
+            ))
         }
         None => None,
     };

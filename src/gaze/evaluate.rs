@@ -1,120 +1,174 @@
-//! How well prediction hides latency on a recording: angular error between the gaze predicted
-//! `h` ms ahead and the gaze actually recorded then, for no prediction (hold the last sample)
-//! and for `Predictor`, split into fixation and saccade samples.
+//! How well prediction hides latency on a recording: the angular error between the gaze
+//! predicted `h` ms ahead and the gaze actually recorded at exactly t + h, per class of eye
+//! movement (see `classes`), for two baselines and the predictor.
+//!
+//! Only what a replay would send is scored, and both sides are treated alike: a sample is
+//! used if `sendable` (on the frame, or within the margin and clamped onto it); the truth at
+//! t + h is interpolated between the two sendable samples around it (never extrapolated, and
+//! never across a gap); every prediction is clamped to the frame, as the renderer clamps it.
 
-use super::prediction::Predictor;
-use super::Sample;
+use std::collections::{BTreeMap, VecDeque};
+
+use super::classes::{self, Class};
+use super::prediction::{constant_velocity, Predictor, Tuning, CV_WINDOW_MS};
+use super::{sendable, Sample, MAX_SAMPLE_GAP_MS};
 use crate::viewing::Viewing;
 
+/// The ways of guessing the gaze h ms ahead that are scored side by side.
+pub const METHODS: [&str; 3] = ["hold", "constant_velocity", "predictor"];
+
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
+pub struct Stat {
+    pub median: f64,
+    pub p95: f64,
+    pub p99: f64,
+}
+
+/// One row of the table: a horizon, a class and each method's error in degrees.
 #[derive(Debug, Clone, PartialEq, serde::Serialize)]
 pub struct HorizonError {
     pub horizon_ms: f64,
     pub class: &'static str,
     pub samples: usize,
-    pub hold_median_deg: f64,
-    pub hold_p95_deg: f64,
-    pub predicted_median_deg: f64,
-    pub predicted_p95_deg: f64,
+    /// In the order of `METHODS`.
+    pub methods: [Stat; 3],
 }
 
-fn percentile(v: &mut [f64], q: f64) -> f64 {
-    if v.is_empty() {
+/// Raw errors (degrees) per horizon and class, per method: pooled across recordings by
+/// concatenation, summarised once.
+#[derive(Debug, Clone, Default)]
+pub struct Errors {
+    by: BTreeMap<(u64, Class), [Vec<f64>; 3]>,
+}
+
+fn percentile(sorted: &[f64], q: f64) -> f64 {
+    if sorted.is_empty() {
         return f64::NAN;
     }
-    v.sort_by(|a, b| a.total_cmp(b));
-    v[((q * (v.len() - 1) as f64).round() as usize).min(v.len() - 1)]
+    sorted[((q * (sorted.len() - 1) as f64).round() as usize).min(sorted.len() - 1)]
 }
 
-pub fn evaluate(samples: &[Sample], viewing: &Viewing, horizons: &[f64]) -> Vec<HorizonError> {
-    let frame_deg = viewing.field_of_view_deg();
-    let mut out = Vec::new();
-    for &h in horizons {
-        // (class, hold error, predicted error)
-        let mut errors: Vec<(bool, f64, f64)> = Vec::new();
-        let mut predictor = Predictor::new(frame_deg);
-        let mut j = 0;
-        for s in samples {
-            let Some(xy) = s.xy else { continue };
-            predictor.push(s.t_ms, xy);
-            // The recorded gaze h ms later (nearest sample within 1 ms), if valid.
-            while j < samples.len() && samples[j].t_ms < s.t_ms + h - 1.0 {
-                j += 1;
+impl Errors {
+    pub fn pool(&mut self, other: &Errors) {
+        for (k, v) in &other.by {
+            let mine = self.by.entry(*k).or_default();
+            for (m, o) in mine.iter_mut().zip(v) {
+                m.extend_from_slice(o);
             }
-            let Some(future) = samples
-                .get(j)
-                .filter(|f| (f.t_ms - (s.t_ms + h)).abs() <= 1.0)
-                .and_then(|f| f.xy)
-            else {
-                continue;
-            };
-            let Some(predicted) = predictor.predict(h) else {
-                continue;
-            };
-            let saccade = predictor.in_saccade();
-            errors.push((
-                saccade,
-                viewing.angle_deg(xy, future),
-                viewing.angle_deg(predicted, future),
-            ));
         }
-        for (class, want) in [("fixation", false), ("saccade", true)] {
-            let mut hold: Vec<f64> = errors.iter().filter(|e| e.0 == want).map(|e| e.1).collect();
-            let mut pred: Vec<f64> = errors.iter().filter(|e| e.0 == want).map(|e| e.2).collect();
-            out.push(HorizonError {
-                horizon_ms: h,
-                class,
-                samples: hold.len(),
-                hold_median_deg: percentile(&mut hold, 0.5),
-                hold_p95_deg: percentile(&mut hold, 0.95),
-                predicted_median_deg: percentile(&mut pred, 0.5),
-                predicted_p95_deg: percentile(&mut pred, 0.95),
-            });
+    }
+
+    pub fn summary(&self) -> Vec<HorizonError> {
+        self.by
+            .iter()
+            .map(|(&(h, class), v)| {
+                let methods = std::array::from_fn(|m| {
+                    let mut e = v[m].clone();
+                    e.sort_by(|a, b| a.total_cmp(b));
+                    Stat {
+                        median: percentile(&e, 0.5),
+                        p95: percentile(&e, 0.95),
+                        p99: percentile(&e, 0.99),
+                    }
+                });
+                HorizonError {
+                    horizon_ms: f64::from_bits(h),
+                    class: class.name(),
+                    samples: v[0].len(),
+                    methods,
+                }
+            })
+            .collect()
+    }
+}
+
+/// The gaze at exactly `t`: a sample at t, or the line between the two samples around it
+/// when both are sendable and not a gap apart.
+pub fn truth_at(samples: &[Sample], pos: &[Option<[f64; 2]>], t: f64) -> Option<[f64; 2]> {
+    const EPS: f64 = 1e-6;
+    let j = samples.partition_point(|s| s.t_ms < t - EPS);
+    let b = samples.get(j)?;
+    if (b.t_ms - t).abs() <= EPS {
+        return pos[j];
+    }
+    let a = samples.get(j.checked_sub(1)?)?;
+    if b.t_ms - a.t_ms > MAX_SAMPLE_GAP_MS {
+        return None;
+    }
+    let (pa, pb) = (pos[j - 1]?, pos[j]?);
+    let f = (t - a.t_ms) / (b.t_ms - a.t_ms);
+    Some([pa[0] + f * (pb[0] - pa[0]), pa[1] + f * (pb[1] - pa[1])])
+}
+
+fn on_frame(p: [f64; 2]) -> [f64; 2] {
+    [p[0].clamp(0.0, 1.0), p[1].clamp(0.0, 1.0)]
+}
+
+/// Scores hold, constant velocity and the predictor on one recording. `saccades`: the
+/// recording's own saccade events (ms), used for the labels when present.
+pub fn errors(
+    samples: &[Sample],
+    saccades: Option<&[(f64, f64)]>,
+    viewing: &Viewing,
+    horizons: &[f64],
+    tuning: Tuning,
+) -> Errors {
+    let pos: Vec<Option<[f64; 2]>> = samples.iter().map(sendable).collect();
+    let motion = classes::label(samples, &pos, viewing, saccades);
+    let since_gap = classes::since_gap(samples, &pos);
+    let mut out = Errors::default();
+    let mut predictor = Predictor::tuned(viewing.field_of_view_deg(), tuning);
+    let mut history: VecDeque<(f64, [f64; 2])> = VecDeque::new();
+    for (i, s) in samples.iter().enumerate() {
+        // Only what replay sends reaches a predictor; the baseline forgets across gaps.
+        let Some(xy) = pos[i] else { continue };
+        if since_gap[i] == 0.0 {
+            history.clear();
+        }
+        history.push_back((s.t_ms, xy));
+        while history
+            .front()
+            .is_some_and(|(t, _)| s.t_ms - t > 4.0 * CV_WINDOW_MS)
+        {
+            history.pop_front();
+        }
+        predictor.push(s.t_ms, xy);
+        for &h in horizons {
+            let Some(truth) = truth_at(samples, &pos, s.t_ms + h) else {
+                continue;
+            };
+            let guesses = [
+                Some(xy),
+                constant_velocity(&history, h),
+                predictor.predict(h),
+            ];
+            let class = classes::classify(samples, &motion, &since_gap, i, h);
+            let slot = out.by.entry((h.to_bits(), class)).or_default();
+            for (m, g) in guesses.into_iter().enumerate() {
+                // Every method guesses whenever one sample has been sent.
+                let g = on_frame(g.unwrap_or(xy));
+                slot[m].push(viewing.angle_deg(g, truth));
+            }
         }
     }
     out
 }
 
 pub fn markdown(rows: &[HorizonError]) -> String {
-    let mut s = String::from("| horizon | samples | class | hold median ° | hold p95 ° | predicted median ° | predicted p95 ° |\n|---:|---:|---|---:|---:|---:|---:|\n");
+    let mut s = String::from(
+        "| horizon | class | samples | hold median / p95 / p99 ° | constant velocity ° | predictor ° |\n|---:|---|---:|---:|---:|---:|\n",
+    );
+    let f = |m: &Stat| format!("{:.3} / {:.3} / {:.3}", m.median, m.p95, m.p99);
     for r in rows {
         s.push_str(&format!(
-            "| {} ms | {} | {} | {:.3} | {:.3} | {:.3} | {:.3} |\n",
+            "| {} ms | {} | {} | {} | {} | {} |\n",
             r.horizon_ms,
-            r.samples,
             r.class,
-            r.hold_median_deg,
-            r.hold_p95_deg,
-            r.predicted_median_deg,
-            r.predicted_p95_deg
+            r.samples,
+            f(&r.methods[0]),
+            f(&r.methods[1]),
+            f(&r.methods[2])
         ));
     }
     s
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn prediction_beats_holding_during_smooth_motion_and_matches_it_at_rest() {
-        let v = Viewing {
-            width: 1920,
-            height: 1080,
-            width_cm: 53.0,
-            distance_cm: 60.0,
-        };
-        // Synthetic-eye saccades: prediction must beat holding during them.
-        let samples = crate::gaze::synthetic::generate(9, &v, 1000.0, 30_000.0);
-        let rows = evaluate(&samples, &v, &[20.0]);
-        let moving = rows.iter().find(|r| r.class == "saccade").unwrap();
-        assert!(
-            moving.samples > 200 && moving.predicted_median_deg < 0.5 * moving.hold_median_deg,
-            "{moving:?}"
-        );
-        let still = rows.iter().find(|r| r.class == "fixation").unwrap();
-        assert!(
-            still.predicted_median_deg <= still.hold_median_deg + 1e-12,
-            "{still:?}"
-        );
-    }
 }

@@ -227,6 +227,7 @@ pub fn parse(text: &str, opts: &ParseOptions) -> Result<Recording, FormatError> 
         format,
         samples,
         pupil_rule,
+        saccades: None,
     })
 }
 

@@ -4,6 +4,7 @@
 //! milliseconds from the start of the recording. Track loss is `None` for x/y; a blink or a
 //! missing pupil is `None` for the pupil.
 
+pub mod classes;
 pub mod evaluate;
 pub mod formats;
 pub mod prediction;
@@ -24,6 +25,11 @@ pub struct Sample {
 /// overshoot the screen edge) and dropped beyond; track loss and blinks send nothing, so the
 /// server keeps rendering for the last valid gaze (which is what the eye last fixated).
 pub const OFF_FRAME_MARGIN: f64 = 0.1;
+
+/// Samples further apart than this are separated by a gap (track loss the file does not mark,
+/// or a client that stopped sending): prediction starts afresh after one. Slow trackers (30 Hz
+/// webcams, 33 ms) stay under it.
+pub const MAX_SAMPLE_GAP_MS: f64 = 50.0;
 
 /// The gaze to send for a sample, if any (see `OFF_FRAME_MARGIN`).
 pub fn sendable(sample: &Sample) -> Option<[f64; 2]> {

@@ -1,11 +1,12 @@
-//! Gaze prediction error against horizon, per class of eye movement: holding the last sample
-//! (dashed) and the predictor (solid), median and 95th percentile in two panels.
+//! Gaze prediction error against horizon: one panel per class of eye movement, each method
+//! (hold, constant velocity, predictor) a colour, the median solid and the 95th percentile
+//! dashed.
 
 use plotters::coord::Shift;
 use plotters::prelude::*;
 
 use super::{colour, err, legend, padded, Plot};
-use crate::gaze::evaluate::HorizonError;
+use crate::gaze::evaluate::{HorizonError, METHODS};
 
 pub struct GazePlot {
     pub title: String,
@@ -23,7 +24,7 @@ impl GazePlot {
 
 impl Plot for GazePlot {
     fn size(&self) -> (u32, u32) {
-        (1100, 460)
+        (1100, 840)
     }
 
     fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> Result<(), String> {
@@ -34,35 +35,22 @@ impl Plot for GazePlot {
                 ("sans-serif", 18).into_font().style(FontStyle::Bold),
             )
             .map_err(err)?;
-        let (left, right) = root.split_horizontally(550);
         let hmax = self.rows.iter().map(|r| r.horizon_ms).fold(1.0, f64::max);
-        let panels: [(
-            &DrawingArea<DB, Shift>,
-            &str,
-            fn(&HorizonError) -> (f64, f64),
-        ); 2] = [
-            (&left, "median error", |r| {
-                (r.hold_median_deg, r.predicted_median_deg)
-            }),
-            (&right, "95th percentile error", |r| {
-                (r.hold_p95_deg, r.predicted_p95_deg)
-            }),
-        ];
-        for (area, caption, f) in panels {
-            let ymax = self
-                .rows
+        let classes = self.classes();
+        let areas = root.split_evenly((classes.len().div_ceil(2).max(1), 2));
+        for (area, class) in areas.iter().zip(classes) {
+            let rows: Vec<&HorizonError> = self.rows.iter().filter(|r| r.class == class).collect();
+            let ymax = rows
                 .iter()
-                .map(|r| {
-                    let (a, b) = f(r);
-                    a.max(b)
-                })
+                .flat_map(|r| r.methods.iter().map(|m| m.p95))
                 .filter(|v| v.is_finite())
                 .fold(0.1, f64::max);
+            let n = rows.iter().map(|r| r.samples).max().unwrap_or(0);
             let mut chart = ChartBuilder::on(area)
                 .margin(14)
                 .x_label_area_size(44)
                 .y_label_area_size(60)
-                .caption(caption, ("sans-serif", 15))
+                .caption(format!("{class} (up to {n} samples)"), ("sans-serif", 15))
                 .build_cartesian_2d(0.0..hmax * 1.08, padded(0.0, ymax, false))
                 .map_err(err)?;
             chart
@@ -74,17 +62,28 @@ impl Plot for GazePlot {
                 .label_style(("sans-serif", 12))
                 .draw()
                 .map_err(err)?;
-            for (i, class) in self.classes().into_iter().enumerate() {
-                let c = colour(i);
-                let rows: Vec<&HorizonError> =
-                    self.rows.iter().filter(|r| r.class == class).collect();
-                let held: Vec<(f64, f64)> = rows.iter().map(|r| (r.horizon_ms, f(r).0)).collect();
-                let predicted: Vec<(f64, f64)> =
-                    rows.iter().map(|r| (r.horizon_ms, f(r).1)).collect();
+            for (m, method) in METHODS.iter().enumerate() {
+                let c = colour(m);
+                let median: Vec<(f64, f64)> = rows
+                    .iter()
+                    .map(|r| (r.horizon_ms, r.methods[m].median))
+                    .collect();
+                let p95: Vec<(f64, f64)> =
+                    rows.iter().map(|r| (r.horizon_ms, r.methods[m].p95)).collect();
                 chart
-                    .draw_series(DashedLineSeries::new(held, 6, 4, c.stroke_width(2)))
+                    .draw_series(LineSeries::new(median.clone(), c.stroke_width(2)))
                     .map_err(err)?
-                    .label(format!("{class}: hold"))
+                    .label(format!("{method}: median"))
+                    .legend(move |(x, y)| {
+                        PathElement::new(vec![(x, y), (x + 20, y)], c.stroke_width(2))
+                    });
+                chart
+                    .draw_series(median.into_iter().map(|p| Circle::new(p, 3, c.filled())))
+                    .map_err(err)?;
+                chart
+                    .draw_series(DashedLineSeries::new(p95, 6, 4, c.stroke_width(2)))
+                    .map_err(err)?
+                    .label(format!("{method}: p95"))
                     .legend(move |(x, y)| {
                         plotters::element::DashedPathElement::new(
                             vec![(x, y), (x + 20, y)],
@@ -93,16 +92,6 @@ impl Plot for GazePlot {
                             c.stroke_width(2),
                         )
                     });
-                chart
-                    .draw_series(LineSeries::new(predicted.clone(), c.stroke_width(2)))
-                    .map_err(err)?
-                    .label(format!("{class}: predicted"))
-                    .legend(move |(x, y)| {
-                        PathElement::new(vec![(x, y), (x + 20, y)], c.stroke_width(2))
-                    });
-                chart
-                    .draw_series(predicted.into_iter().map(|p| Circle::new(p, 3, c.filled())))
-                    .map_err(err)?;
             }
             legend(&mut chart, SeriesLabelPosition::UpperLeft)?;
         }

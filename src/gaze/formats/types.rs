@@ -117,4 +117,7 @@ pub struct Recording {
     pub samples: Vec<Sample>,
     /// How pupil values were turned into millimetres, if they were.
     pub pupil_rule: Option<String>,
+    /// The recording's own saccade events (ms from the first sample), where the format has
+    /// them (EyeLink ASC `ESACC`); scoring labels samples with them instead of by velocity.
+    pub saccades: Option<Vec<(f64, f64)>>,
 }
