@@ -116,8 +116,10 @@ enum Command {
     /// valid gaze. Writes DIR/frames.csv, DIR/summary.json and, with --save-frames, the images;
     /// Ctrl-C stops early and writes what came so far (summary.json says "interrupted").
     Replay(ReplayArgs),
-    /// Evaluate gaze prediction on a recording: angular error at several horizons, holding the
-    /// last sample vs predicting, for fixation and saccade samples.
+    /// Score gaze prediction on recordings: the angular error at several horizons of holding
+    /// the last sample, constant velocity and the server's predictor, per class (fixation,
+    /// saccade, pursuit, post-gap, saccade onset), per recording and pooled
+    /// (docs/gaze/prediction.md says how).
     Gaze(GazeArgs),
     /// Load-test a server: N concurrent sessions driven by the synthetic eye for a fixed time,
     /// acknowledging frames like real clients. Reports gaze-to-frame latency and the server's

@@ -27,9 +27,18 @@ fn lost(t_ms: f64) -> Sample {
 
 #[test]
 fn the_truth_is_interpolated_at_exactly_t_plus_h_and_never_across_a_gap() {
-    let samples = vec![at(0.0, 0.1, 0.5), at(2.0, 0.3, 0.5), lost(4.0), at(6.0, 0.9, 0.5)];
+    let samples = vec![
+        at(0.0, 0.1, 0.5),
+        at(2.0, 0.3, 0.5),
+        lost(4.0),
+        at(6.0, 0.9, 0.5),
+    ];
     let pos: Vec<_> = samples.iter().map(sendable).collect();
-    assert_eq!(truth_at(&samples, &pos, 2.0), Some([0.3, 0.5]), "on a sample");
+    assert_eq!(
+        truth_at(&samples, &pos, 2.0),
+        Some([0.3, 0.5]),
+        "on a sample"
+    );
     let [x, _] = truth_at(&samples, &pos, 0.5).unwrap();
     assert!((x - 0.15).abs() < 1e-12, "a quarter of the way: {x}");
     assert_eq!(truth_at(&samples, &pos, 3.0), None, "next to track loss");
@@ -71,7 +80,10 @@ fn constant_velocity_is_exact_on_constant_velocity_at_every_horizon() {
             // Hold is behind by v·h (10°/s in frame units; the angle seen from the eye is a
             // little more or less off-centre).
             let expected = 10.0 * h / 1000.0;
-            assert!((r.methods[0].median - expected).abs() < 0.1 * expected, "{r:?}");
+            assert!(
+                (r.methods[0].median - expected).abs() < 0.1 * expected,
+                "{r:?}"
+            );
         }
     }
 }
@@ -103,13 +115,21 @@ fn labels_find_the_saccade_the_pursuit_and_the_gap() {
     let class = |i: usize, h: f64| classes::classify(&samples, &motion, &since, i, h);
     assert_eq!(class(240, 30.0), Class::PostGap);
     assert_eq!(class(350, 30.0), Class::Pursuit);
-    assert_eq!(class(85, 30.0), Class::SaccadeOnset, "a saccade starts within h");
+    assert_eq!(
+        class(85, 30.0),
+        Class::SaccadeOnset,
+        "a saccade starts within h"
+    );
     assert_eq!(class(60, 30.0), Class::Fixation);
     // The recording's own events replace the velocity labels.
     let events = [(50.0, 52.0)];
     let motion = classes::label(&samples, &pos, &v, Some(&events));
     assert_eq!(motion[51], Motion::Saccade);
-    assert_ne!(motion[110], Motion::Saccade, "not a saccade by the recording's events");
+    assert_ne!(
+        motion[110],
+        Motion::Saccade,
+        "not a saccade by the recording's events"
+    );
 }
 
 #[test]
@@ -176,15 +196,23 @@ fn on_synthetic_saccades_prediction_is_never_worse_than_holding() {
 }
 
 fn shipped(file: &str, w: u32, h: u32) -> Vec<HorizonError> {
-    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/gaze").join(file);
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("assets/gaze")
+        .join(file);
     let text = std::fs::read_to_string(path).unwrap();
     let opts = ParseOptions {
         screen: Some((w, h)),
         ..Default::default()
     };
     let rec = parse(&text, &opts).unwrap();
-    errors(&rec.samples, rec.saccades.as_deref(), &viewing(w, h), &[10.0, 20.0, 30.0], Tuning::default())
-        .summary()
+    errors(
+        &rec.samples,
+        rec.saccades.as_deref(),
+        &viewing(w, h),
+        &[10.0, 20.0, 30.0],
+        Tuning::default(),
+    )
+    .summary()
 }
 
 /// Both shipped recordings: the 500 Hz one the tuning was chosen on, and the 1000 Hz one it

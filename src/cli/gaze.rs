@@ -36,9 +36,19 @@ pub struct ReadArgs {
     /// Generic CSV: the vertical gaze column (0–1 from the top, or pixels with --pixels).
     #[arg(long, default_value = "y")]
     pub y_col: String,
-    /// Generic CSV: the pupil diameter column, mm (optional in the file).
+    /// Generic CSV: the pupil column (optional in the file; its unit is --pupil-unit).
     #[arg(long, default_value = "pupil_mm")]
     pub pupil_col: String,
+    /// What the pupil column holds: mm (diameter in millimetres), diameter or area (arbitrary
+    /// units, scaled so the recording's median is --pupil-median-mm; diameter ∝ √area).
+    /// Default: the format's own (EyeLink: area, or what the ASC file says; Tobii: mm;
+    /// generic: mm).
+    #[arg(long, value_enum)]
+    pub pupil_unit: Option<fovea::gaze::formats::PupilUnit>,
+    /// Binocular recordings: which eye (default: the average, which uses the other eye where
+    /// one is lost).
+    #[arg(long, value_enum)]
+    pub eye: Option<fovea::gaze::formats::Eye>,
     /// Generic CSV: the time column's unit: s, ms, us or ns.
     #[arg(long, default_value = "ms")]
     pub time_unit: String,
@@ -52,6 +62,8 @@ impl Default for ReadArgs {
         ReadArgs {
             format: None,
             pupil_median_mm: 4.0,
+            pupil_unit: None,
+            eye: None,
             time_col: "t_ms".into(),
             x_col: "x".into(),
             y_col: "y".into(),
@@ -69,7 +81,11 @@ impl RecordingArgs {
 }
 
 impl ReadArgs {
-    pub fn load(&self, file: &Path, screen: Option<&str>) -> Result<fovea::gaze::formats::Recording> {
+    pub fn load(
+        &self,
+        file: &Path,
+        screen: Option<&str>,
+    ) -> Result<fovea::gaze::formats::Recording> {
         // An hour at 2000 Hz is ~300 MB of CSV; more is not a recording (or is /dev/zero).
         let bytes = fovea::scene::limits::read_capped(file, 1 << 30)
             .with_context(|| format!("reading {}", file.display()))?;
@@ -88,6 +104,8 @@ impl ReadArgs {
                 pixels: self.pixels,
             },
             pupil_median_mm: self.pupil_median_mm,
+            pupil_unit: self.pupil_unit,
+            eye: self.eye,
             ..Default::default()
         };
         let rec = fovea::gaze::formats::parse(&text, &opts)
@@ -100,6 +118,15 @@ impl ReadArgs {
             rec.format,
             rec.samples.len()
         );
+        if let Some(eye) = rec.eye {
+            eprintln!("eye: {eye:?} (binocular recording; --eye left|right|average)");
+        }
+        if let Some((w, h)) = rec.screen {
+            eprintln!("screen: {w}x{h} (from the file)");
+        }
+        if let Some(s) = &rec.saccades {
+            eprintln!("{} saccades labelled by the file", s.len());
+        }
         if let Some(rule) = &rec.pupil_rule {
             eprintln!("pupil: {rule}");
         }
@@ -155,7 +182,7 @@ pub struct GazeArgs {
     #[arg(required = true)]
     pub files: Vec<PathBuf>,
     /// Screen size WxH in pixels for formats in pixels: once for every file, or once per file
-    /// in the files' order.
+    /// in the files' order (default: what the file says, as ASC and Pro Lab files do).
     #[arg(long = "screen")]
     pub screens: Vec<String>,
     #[command(flatten)]
@@ -261,7 +288,10 @@ pub fn gaze(a: GazeArgs) -> Result<()> {
     for (i, file) in a.files.iter().enumerate() {
         let screen = a.screens.get(i).or(a.screens.first()).map(String::as_str);
         let rec = a.read.load(file, screen)?;
-        let (w, h) = screen.map(parse_size).transpose()?.unwrap_or((1920, 1080));
+        let (w, h) = match screen.map(parse_size).transpose()? {
+            Some(size) => size,
+            None => rec.screen.unwrap_or((1920, 1080)),
+        };
         let display = fovea::viewing::Display {
             width_cm: a.display_width_cm,
             distance_cm: a.distance_cm,
@@ -306,7 +336,10 @@ pub fn gaze(a: GazeArgs) -> Result<()> {
                 &dir.join(format!("gaze-{name}")),
             )?;
         }
-        eprintln!("wrote {0}/gaze.md, gaze.json and gaze-*.svg/png", dir.display());
+        eprintln!(
+            "wrote {0}/gaze.md, gaze.json and gaze-*.svg/png",
+            dir.display()
+        );
     }
     Ok(())
 }

@@ -63,7 +63,13 @@ pub type Positions = [Option<[f64; 2]>];
 
 /// Central-difference speed (deg/s) at `i` over ±`half` ms, from the valid samples nearest
 /// those times with no gap in between; None where the window reaches a gap or the ends.
-fn speed(samples: &[Sample], pos: &Positions, viewing: &Viewing, i: usize, half: f64) -> Option<f64> {
+fn speed(
+    samples: &[Sample],
+    pos: &Positions,
+    viewing: &Viewing,
+    i: usize,
+    half: f64,
+) -> Option<f64> {
     let t = samples[i].t_ms;
     let mut a = i;
     while a > 0 && samples[a].t_ms > t - half {
@@ -95,8 +101,9 @@ pub fn label(
                 let t = samples[i].t_ms;
                 events.iter().any(|&(a, b)| a <= t && t <= b)
             }
-            None => speed(samples, pos, viewing, i, SACCADE_HALF_MS)
-                .is_some_and(|v| v >= SACCADE_DEG_S),
+            None => {
+                speed(samples, pos, viewing, i, SACCADE_HALF_MS).is_some_and(|v| v >= SACCADE_DEG_S)
+            }
         })
         .collect();
     (0..samples.len())
@@ -112,7 +119,9 @@ pub fn label(
                 .rev()
                 .skip(samples.len() - i)
                 .take_while(|&k| samples[k].t_ms >= t - PURSUIT_HALF_MS)
-                .chain((i + 1..samples.len()).take_while(|&k| samples[k].t_ms <= t + PURSUIT_HALF_MS))
+                .chain(
+                    (i + 1..samples.len()).take_while(|&k| samples[k].t_ms <= t + PURSUIT_HALF_MS),
+                )
                 .any(|k| fast[k]);
             let slow_move = speed(samples, pos, viewing, i, PURSUIT_HALF_MS)
                 .is_some_and(|v| v >= PURSUIT_DEG_S);
@@ -131,7 +140,13 @@ pub fn label(
 /// when a saccade starts in (t, t + h]: no method can see that one coming, so it is kept
 /// apart rather than inflating the fixation figures or the saccade ones.
 /// `since_gap`: ms since the last gap ended, at each sample.
-pub fn classify(samples: &[Sample], motion: &[Motion], since_gap: &[f64], i: usize, h: f64) -> Class {
+pub fn classify(
+    samples: &[Sample],
+    motion: &[Motion],
+    since_gap: &[f64],
+    i: usize,
+    h: f64,
+) -> Class {
     if since_gap[i] <= POST_GAP_MS {
         return Class::PostGap;
     }
@@ -165,7 +180,9 @@ pub fn since_gap(samples: &[Sample], pos: &Positions) -> Vec<f64> {
                 return 0.0;
             }
             // Rows missing altogether are a gap too (a tracker that drops samples).
-            if in_gap || s.t_ms - std::mem::replace(&mut previous, s.t_ms) > super::MAX_SAMPLE_GAP_MS {
+            if in_gap
+                || s.t_ms - std::mem::replace(&mut previous, s.t_ms) > super::MAX_SAMPLE_GAP_MS
+            {
                 previous = s.t_ms;
                 start = s.t_ms;
                 in_gap = false;

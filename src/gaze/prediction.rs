@@ -190,7 +190,8 @@ impl Predictor {
         }
         self.history.push_back((t_ms, xy));
         let window = self.tuning.velocity_ms;
-        while self.history.len() > 2 && self.history.front().is_some_and(|(t, _)| t_ms - t > window) {
+        while self.history.len() > 2 && self.history.front().is_some_and(|(t, _)| t_ms - t > window)
+        {
             self.history.pop_front();
         }
         self.follow_saccade();
@@ -309,10 +310,10 @@ impl Predictor {
                 let dir = [moved[0] / travelled, moved[1] / travelled];
                 let amplitude = self.amplitude_scale()
                     * if speed < self.tuning.past_peak * s.peak_deg_s {
-                    amplitude_from_peak_velocity(s.peak_deg_s)
-                } else {
-                    amplitude_from_peak_velocity(speed * self.tuning.rising_gain)
-                };
+                        amplitude_from_peak_velocity(s.peak_deg_s)
+                    } else {
+                        amplitude_from_peak_velocity(speed * self.tuning.rising_gain)
+                    };
                 let ahead = decelerated_travel(speed / 1000.0, amplitude - travelled, h);
                 p = [
                     last[0] + dir[0] * ahead / d[0],

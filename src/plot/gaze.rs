@@ -68,8 +68,10 @@ impl Plot for GazePlot {
                     .iter()
                     .map(|r| (r.horizon_ms, r.methods[m].median))
                     .collect();
-                let p95: Vec<(f64, f64)> =
-                    rows.iter().map(|r| (r.horizon_ms, r.methods[m].p95)).collect();
+                let p95: Vec<(f64, f64)> = rows
+                    .iter()
+                    .map(|r| (r.horizon_ms, r.methods[m].p95))
+                    .collect();
                 chart
                     .draw_series(LineSeries::new(median.clone(), c.stroke_width(2)))
                     .map_err(err)?

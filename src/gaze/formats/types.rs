@@ -9,8 +9,19 @@ use crate::gaze::Sample;
 #[serde(rename_all = "snake_case")]
 #[value(rename_all = "snake_case")]
 pub enum Format {
-    /// `t_s, xpos, ypos, ps`: seconds, pixels on a stated screen, pupil AREA (arbitrary units).
+    /// The CSV layout of `../shared/data/gaze` (converted from EDF): `t_s, xpos, ypos, ps`, or
+    /// binocular `xpos_l, ypos_l, ps_l, xpos_r, …` (`_left`/`_right` too): seconds, pixels on
+    /// a stated screen, pupil AREA (arbitrary units).
     Eyelink,
+    /// EyeLink ASC (edf2asc): sample lines `time x y pupil …` or binocular `time xl yl pl xr yr
+    /// pr …` with `.` for missing values; `SAMPLES GAZE LEFT RIGHT` says the eyes, `PUPIL AREA`
+    /// or `PUPIL DIAMETER` the pupil, `MSG … DISPLAY_COORDS` the screen; `ESACC` events label
+    /// saccades and `EBLINK` events mark blinks.
+    EyelinkAsc,
+    /// EyeLink Data Viewer sample report (TSV): `TIMESTAMP` (ms), `LEFT_/RIGHT_GAZE_X/Y`
+    /// (pixels), `LEFT_/RIGHT_PUPIL_SIZE` (area unless --pupil-unit says), `…_IN_BLINK`,
+    /// `…_IN_SACCADE`; `.` for missing values.
+    DataViewer,
     /// `gaze_timestamp, norm_pos_x, norm_pos_y, confidence`: seconds, normalised with the origin
     /// at the BOTTOM left, confidence in [0, 1].
     PupilCore,
@@ -19,8 +30,37 @@ pub enum Format {
     /// `device_time_stamp, gaze_point_x, gaze_point_y, pupil_diameter`: µs, normalised
     /// (top-left), mm.
     Tobii,
+    /// Tobii Pro Lab data export (TSV): `Recording timestamp` (µs when the header says `[μs]`,
+    /// else ms), `Gaze point X/Y` or per eye `Gaze point left/right X/Y` (pixels on
+    /// `Recording resolution width/height`), `Pupil diameter left/right` (mm), `Validity
+    /// left/right`, `Eye movement type` (its saccades label samples), `Sensor` (rows of other
+    /// sensors are skipped).
+    TobiiProLab,
     /// Columns named by `Columns` (defaults `t_ms, x, y, pupil_mm`), normalised coordinates.
     Generic,
+}
+
+/// Which eye of a binocular recording to use.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize, clap::ValueEnum)]
+#[serde(rename_all = "snake_case")]
+pub enum Eye {
+    Left,
+    Right,
+    /// The mean of both eyes where both are tracked, the one that is where only one is.
+    #[default]
+    Average,
+}
+
+/// What a pupil column holds.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, clap::ValueEnum)]
+#[serde(rename_all = "snake_case")]
+pub enum PupilUnit {
+    /// Diameter in millimetres (Tobii, Pupil Labs, our own recordings).
+    Mm,
+    /// Diameter in arbitrary units: scaled so the recording's median is `pupil_median_mm`.
+    Diameter,
+    /// Area in arbitrary units (EyeLink's default): diameter ∝ √area, then scaled as above.
+    Area,
 }
 
 /// Column mapping for the generic format.
@@ -60,6 +100,11 @@ pub struct ParseOptions {
     pub pupil_median_mm: f64,
     /// Pupil Labs Core samples below this confidence count as track loss.
     pub min_confidence: f64,
+    /// Which eye of a binocular recording (default: the average, or the only eye recorded).
+    pub eye: Option<Eye>,
+    /// What the pupil column holds, where the format does not say (default: the format's own
+    /// unit; mm for the generic format).
+    pub pupil_unit: Option<PupilUnit>,
 }
 
 impl Default for ParseOptions {
@@ -70,6 +115,8 @@ impl Default for ParseOptions {
             columns: Columns::default(),
             pupil_median_mm: 4.0,
             min_confidence: 0.6,
+            eye: None,
+            pupil_unit: None,
         }
     }
 }
@@ -78,7 +125,7 @@ impl Default for ParseOptions {
 pub enum FormatError {
     #[error("the file is empty")]
     Empty,
-    #[error("cannot tell the format from the header {header:?}; say --format (eyelink, pupil_core, pupil_neon, tobii, generic)")]
+    #[error("cannot tell the format from the header {header:?}; say --format (eyelink, eyelink_asc, data_viewer, pupil_core, pupil_neon, tobii, tobii_pro_lab, generic)")]
     Unknown { header: String },
     #[error("{format:?} needs column {column:?}, which the header {header:?} lacks")]
     MissingColumn {
@@ -102,6 +149,10 @@ pub enum FormatError {
     TimeUnit(String),
     #[error("the file has a header but no samples")]
     NoSamples,
+    #[error("--eye {asked:?}: the recording has only the {has} eye")]
+    EyeMissing { asked: Eye, has: &'static str },
+    #[error("line {line}: {what}")]
+    Malformed { line: usize, what: String },
     #[error("line {line}: time {t} ms is {days:.0} days after the first sample; Fovea replays at most {MAX_SPAN_DAYS} days (is --time-unit right?)")]
     TooLong { line: usize, t: f64, days: f64 },
 }
@@ -117,6 +168,10 @@ pub struct Recording {
     pub samples: Vec<Sample>,
     /// How pupil values were turned into millimetres, if they were.
     pub pupil_rule: Option<String>,
+    /// The eye used, for binocular recordings.
+    pub eye: Option<Eye>,
+    /// The screen size the file states (ASC `DISPLAY_COORDS`, Pro Lab's recording resolution).
+    pub screen: Option<(u32, u32)>,
     /// The recording's own saccade events (ms from the first sample), where the format has
     /// them (EyeLink ASC `ESACC`); scoring labels samples with them instead of by velocity.
     pub saccades: Option<Vec<(f64, f64)>>,
