@@ -47,6 +47,7 @@ async fn main() -> Result<()> {
             x: t,
             y: 1.0 - t,
             pupil_mm: Some(4.0),
+            sample_t_ms: None,
         })
         .await?;
         let header = loop {

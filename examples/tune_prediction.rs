@@ -29,29 +29,77 @@ fn main() -> anyhow::Result<()> {
     let args: Vec<String> = std::env::args().skip(1).collect();
     let (file, size) = match args.as_slice() {
         [f, s] => (f.clone(), s.clone()),
-        _ => ("assets/gaze/eyelink_500hz_1920x1200.csv".into(), "1920x1200".into()),
+        _ => (
+            "assets/gaze/eyelink_500hz_1920x1200.csv".into(),
+            "1920x1200".into(),
+        ),
     };
     let (w, h) = size
         .split_once('x')
         .and_then(|(w, h)| Some((w.parse().ok()?, h.parse().ok()?)))
         .ok_or_else(|| anyhow::anyhow!("size like 1920x1200"))?;
     let text = std::fs::read_to_string(&file)?;
-    let rec = parse(&text, &ParseOptions { screen: Some((w, h)), ..Default::default() })?;
+    let rec = parse(
+        &text,
+        &ParseOptions {
+            screen: Some((w, h)),
+            ..Default::default()
+        },
+    )?;
     let viewing = Viewing::new(Display::default(), w, h);
     let horizons = [10.0, 20.0, 30.0, 50.0];
-    let eval = |t: Tuning| score(&errors(&rec.samples, rec.saccades.as_deref(), &viewing, &horizons, t).summary());
+    let eval = |t: Tuning| {
+        score(
+            &errors(
+                &rec.samples,
+                rec.saccades.as_deref(),
+                &viewing,
+                &horizons,
+                t,
+            )
+            .summary(),
+        )
+    };
     let mut best = Tuning::default();
     let mut best_score = eval(best);
     println!("default: {best_score:.3}");
     type Knob = (&'static str, fn(&mut Tuning, f64), &'static [f64]);
     let knobs: [Knob; 7] = [
-        ("velocity_ms", |t, v| t.velocity_ms = v, &[2.0, 3.0, 4.0, 6.0, 8.0, 12.0]),
-        ("onset_deg_s", |t, v| t.onset_deg_s = v, &[20.0, 30.0, 45.0, 60.0, 80.0, 120.0, 160.0]),
-        ("confirm", |t, v| t.confirm = v as u32, &[1.0, 2.0, 3.0, 4.0]),
-        ("end_fraction", |t, v| t.end_fraction = v, &[0.1, 0.2, 0.25, 0.35, 0.5, 0.6, 0.7, 0.8]),
-        ("past_peak", |t, v| t.past_peak = v, &[0.4, 0.5, 0.6, 0.7, 0.8, 0.9, 0.95, 1.0]),
-        ("rising_gain", |t, v| t.rising_gain = v, &[0.6, 0.8, 1.0, 1.25, 1.5, 2.0, 3.0]),
-        ("amplitude_gain", |t, v| t.amplitude_gain = v, &[0.2, 0.3, 0.4, 0.5, 0.6, 0.7, 0.85, 1.0, 1.2, 1.5]),
+        (
+            "velocity_ms",
+            |t, v| t.velocity_ms = v,
+            &[2.0, 3.0, 4.0, 6.0, 8.0, 12.0],
+        ),
+        (
+            "onset_deg_s",
+            |t, v| t.onset_deg_s = v,
+            &[20.0, 30.0, 45.0, 60.0, 80.0, 120.0, 160.0],
+        ),
+        (
+            "confirm",
+            |t, v| t.confirm = v as u32,
+            &[1.0, 2.0, 3.0, 4.0],
+        ),
+        (
+            "end_fraction",
+            |t, v| t.end_fraction = v,
+            &[0.1, 0.2, 0.25, 0.35, 0.5, 0.6, 0.7, 0.8],
+        ),
+        (
+            "past_peak",
+            |t, v| t.past_peak = v,
+            &[0.4, 0.5, 0.6, 0.7, 0.8, 0.9, 0.95, 1.0],
+        ),
+        (
+            "rising_gain",
+            |t, v| t.rising_gain = v,
+            &[0.6, 0.8, 1.0, 1.25, 1.5, 2.0, 3.0],
+        ),
+        (
+            "amplitude_gain",
+            |t, v| t.amplitude_gain = v,
+            &[0.2, 0.3, 0.4, 0.5, 0.6, 0.7, 0.85, 1.0, 1.2, 1.5],
+        ),
     ];
     for round in 0..6 {
         let before = best_score;
@@ -72,7 +120,14 @@ fn main() -> anyhow::Result<()> {
         }
     }
     println!("best: {best:?}\nscore {best_score:.3}");
-    let rows = errors(&rec.samples, rec.saccades.as_deref(), &viewing, &horizons, best).summary();
+    let rows = errors(
+        &rec.samples,
+        rec.saccades.as_deref(),
+        &viewing,
+        &horizons,
+        best,
+    )
+    .summary();
     println!("{}", fovea::gaze::evaluate::markdown(&rows));
     Ok(())
 }

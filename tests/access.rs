@@ -188,6 +188,7 @@ async fn a_drain_says_goodbye_admits_nobody_and_ends_within_its_grace() {
                 x: 0.3,
                 y: 0.6,
                 pupil_mm: Some(4.0),
+                sample_t_ms: None,
             };
             c.gaze(&g).await.unwrap();
         }
@@ -232,6 +233,7 @@ async fn a_drain_says_goodbye_admits_nobody_and_ends_within_its_grace() {
         x: 0.7,
         y: 0.2,
         pupil_mm: None,
+        sample_t_ms: None,
     };
     stayer.gaze(&g).await.unwrap();
     until(

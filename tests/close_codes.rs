@@ -123,6 +123,7 @@ async fn pings_let_go_of_a_silent_client_and_keep_a_reading_one() {
         x: 0.2,
         y: 0.2,
         pupil_mm: None,
+        sample_t_ms: None,
     };
     viewer.gaze(&g).await.unwrap();
     loop {

@@ -127,6 +127,7 @@ async fn a_drain_ends_on_time_with_a_client_that_never_reads_and_keeps_its_gaze(
             x,
             y: 0.5,
             pupil_mm: None,
+            sample_t_ms: None,
         };
         c.gaze(&g).await.unwrap();
         tokio::time::sleep(Duration::from_millis(5)).await;

@@ -117,6 +117,7 @@ async fn frames_over_the_budget_are_refused_naming_the_limit_and_a_size_that_fit
                     x: 0.4,
                     y: 0.5,
                     pupil_mm: None,
+                    sample_t_ms: None,
                 })
                 .await
                 .unwrap();

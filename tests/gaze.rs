@@ -110,6 +110,19 @@ async fn a_recorded_session_replays_to_the_same_frames() {
     let sent: Vec<[f64; 2]> = synthetic.iter().filter_map(fovea::gaze::sendable).collect();
     let got: Vec<[f64; 2]> = recorded.samples.iter().filter_map(|s| s.xy).collect();
     assert_eq!(got, sent, "every sent sample was recorded, exactly");
+    // At its own times, though replayed at half speed: the recording keeps each sample's time.
+    let sent_times: Vec<f64> = synthetic
+        .iter()
+        .filter(|s| fovea::gaze::sendable(s).is_some())
+        .map(|s| s.t_ms)
+        .collect();
+    for (r, t) in recorded.samples.iter().zip(&sent_times) {
+        assert!(
+            (r.t_ms - (t - sent_times[0])).abs() < 1e-6,
+            "{} vs {t}",
+            r.t_ms
+        );
+    }
     let (second, _) = replay(&recorded.samples, &slow, |_, _| {}).await.unwrap();
     // A frame answering sample k shows the same gaze in both runs. (Which samples get their
     // own frame depends on timing: a slow first frame, while shaders compile, coalesces a few.)
@@ -265,6 +278,7 @@ async fn send_still_gaze(c: &mut fovea::client::Client, n: u64, pupil_mm: Option
             x: 0.4,
             y: 0.4,
             pupil_mm,
+            sample_t_ms: None,
         };
         c.gaze(&g).await.unwrap();
     }
@@ -314,6 +328,20 @@ async fn ctrl_c_mid_replay_leaves_complete_outputs() {
         "{summary}"
     );
     assert!(rows > 0);
+    // Provenance: what was replayed, how, and against which server.
+    assert_eq!(summary["recording"]["format"], "eyelink", "{summary}");
+    assert_eq!(summary["recording"]["screen"], "1920x1200", "{summary}");
+    assert_eq!(summary["asked"]["scene"], "bunny", "{summary}");
+    assert_eq!(summary["asked"]["size"], "96x64", "{summary}");
+    assert_eq!(
+        summary["server"]["version"],
+        env!("CARGO_PKG_VERSION"),
+        "{summary}"
+    );
+    assert_eq!(summary["server"]["codec"], "jpeg", "{summary}");
+    assert!(summary["server"]["adapter"]
+        .as_str()
+        .is_some_and(|a| !a.is_empty()));
     let _ = std::fs::remove_dir_all(&out);
     shutdown.stop().await;
 }

@@ -47,6 +47,7 @@ async fn frame_for(c: &mut Client, seq: u64) {
         x: 0.3 + 0.01 * (seq % 10) as f64,
         y: 0.5,
         pupil_mm: None,
+        sample_t_ms: None,
     })
     .await
     .unwrap();
@@ -108,6 +109,7 @@ async fn admission_stalls_and_the_load_report() {
         x: 0.6,
         y: 0.5,
         pupil_mm: None,
+        sample_t_ms: None,
     })
     .await
     .unwrap();

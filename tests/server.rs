@@ -77,6 +77,7 @@ fn gaze(seq: u64, x: f64, y: f64) -> Gaze {
         x,
         y,
         pupil_mm: Some(4.0),
+        sample_t_ms: None,
     }
 }
 

@@ -380,6 +380,7 @@ async fn a_served_folder_offers_its_scenes_by_name_and_leaves_broken_ones_out() 
         x: 0.5,
         y: 0.5,
         pupil_mm: None,
+        sample_t_ms: None,
     })
     .await
     .unwrap();

@@ -244,6 +244,27 @@ pub fn replay(a: ReplayArgs) -> Result<()> {
         },
     ))?;
     eprintln!();
+    // Provenance: what was replayed, how, and against what, beside the figures.
+    let mut summary = serde_json::to_value(&summary)?;
+    summary["recording"] = serde_json::json!({
+        "file": a.recording.file.display().to_string(),
+        "format": rec.format,
+        "eye": rec.eye,
+        "screen": a.recording.screen.clone().or(rec.screen.map(|(w, h)| format!("{w}x{h}"))),
+        "pupil": rec.pupil_rule,
+        "samples": rec.samples.len(),
+    });
+    summary["asked"] = serde_json::json!({
+        "url": a.url,
+        "scene": a.scene,
+        "preset": a.preset.to_string(),
+        "size": format!("{}x{}", a.size.0, a.size.1),
+        "speed": a.speed,
+        "start_s": a.start,
+        "duration_s": a.duration,
+        "loops": a.loops,
+    });
+    summary["client_version"] = env!("CARGO_PKG_VERSION").into();
     std::fs::create_dir_all(&a.out).with_context(|| format!("creating {}", a.out.display()))?;
     std::fs::write(
         a.out.join("frames.csv"),

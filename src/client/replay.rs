@@ -91,6 +91,19 @@ pub struct ReplaySummary {
     pub latency_p95_ms: f64,
     pub latency_p99_ms: f64,
     pub seconds: f64,
+    /// What the server granted, for the provenance of the figures.
+    pub server: ServerInfo,
+}
+
+/// The server side of a replay's provenance, from its welcome.
+#[derive(Debug, Clone, Serialize)]
+pub struct ServerInfo {
+    pub version: String,
+    pub adapter: String,
+    pub scene: String,
+    pub width: u32,
+    pub height: u32,
+    pub codec: crate::protocol::Codec,
 }
 
 /// When each sample is sent (ms after the replay starts) and its index: recording time from
@@ -102,11 +115,7 @@ pub fn schedule(
     duration_ms: Option<f64>,
     loops: u32,
 ) -> Vec<(f64, usize)> {
-    let speed = if speed.is_finite() && speed > 0.0 {
-        speed
-    } else {
-        1.0
-    };
+    let speed = sane_speed(speed);
     let end = duration_ms.map(|d| start_ms + d).unwrap_or(f64::INFINITY);
     let selected: Vec<usize> = (0..samples.len())
         .filter(|&i| samples[i].t_ms >= start_ms && samples[i].t_ms < end)
@@ -131,6 +140,15 @@ pub fn schedule(
         }
     }
     out
+}
+
+/// A usable speed factor: a finite positive one, else 1.
+fn sane_speed(speed: f64) -> f64 {
+    if speed.is_finite() && speed > 0.0 {
+        speed
+    } else {
+        1.0
+    }
 }
 
 /// Calls `send` for every scheduled sample at its time after `start`, on tokio's clock.
@@ -176,7 +194,7 @@ pub async fn replay(
         opts.duration_ms,
         opts.loops,
     );
-    let (link, mut events, _) = Link::open(LinkOptions {
+    let (link, mut events, welcome) = Link::open(LinkOptions {
         url: opts.url.clone(),
         token: opts.token.clone(),
         hello: opts.hello.clone(),
@@ -236,11 +254,12 @@ pub async fn replay(
         })
     };
     let start = tokio::time::Instant::now();
+    let speed = sane_speed(opts.speed);
     let total = plan.len();
     let mut sent_count = 0usize;
     let mut unsendable = 0usize;
     let mut seq = 0u64;
-    let sending = pace(start, &plan, |index, _| {
+    let sending = pace(start, &plan, |index, at_ms| {
         seq += 1;
         let s = &samples[index];
         let Some([x, y]) = sendable(s) else {
@@ -255,8 +274,11 @@ pub async fn replay(
             .pupil_mm
             .map(|p| format!(r#","pupil_mm":{p}"#))
             .unwrap_or_default();
+        // The sample's own time on the recording's clock (its loop offset included, the speed
+        // factor undone), so the server's recording of this session keeps the original timing.
+        let sample_t = at_ms * speed;
         let ok = link.send(format!(
-            r#"{{"type":"gaze","seq":{seq},"t_ms":{t_ms},"x":{x},"y":{y}{pupil}}}"#
+            r#"{{"type":"gaze","seq":{seq},"t_ms":{t_ms},"sample_t_ms":{sample_t},"x":{x},"y":{y}{pupil}}}"#
         ));
         sent_count += 1;
         if sent_count % 200 == 0 {
@@ -309,6 +331,14 @@ pub async fn replay(
         latency_p95_ms: percentile(&mut latencies, 0.95),
         latency_p99_ms: percentile(&mut latencies, 0.99),
         seconds: clock.elapsed().as_secs_f64(),
+        server: ServerInfo {
+            version: welcome.version,
+            adapter: welcome.adapter,
+            scene: welcome.scene.name,
+            width: welcome.width,
+            height: welcome.height,
+            codec: welcome.codec,
+        },
     };
     Ok((frames, summary))
 }

@@ -120,6 +120,11 @@ pub struct Gaze {
     pub y: f64,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub pupil_mm: Option<f64>,
+    /// The time the tracker took the sample, ms on the recording's own clock, when that is
+    /// not `t_ms` (a replay sends the recorded time, so a session recording keeps the
+    /// original timing however the samples travelled).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub sample_t_ms: Option<f64>,
 }
 
 /// The client is done with a frame (shown, or dropped unseen): it returns one credit.
@@ -154,6 +159,9 @@ pub struct Welcome {
     pub limits: Limits,
     /// The GPU adapter frames come from, e.g. "llvmpipe (LLVM 15.0.6, 256 bits) (Vulkan)".
     pub adapter: String,
+    /// The server's version (`fovea --version`), for the provenance of measurements.
+    #[serde(default)]
+    pub version: String,
     /// Where this session's own gaze recording can be downloaded (relative URL with its key),
     /// when the server records.
     #[serde(default, skip_serializing_if = "Option::is_none")]

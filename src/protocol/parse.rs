@@ -213,6 +213,9 @@ impl From<KnobError> for ProtocolError {
 
 fn validate_gaze(g: &Gaze, limits: &Limits) -> Result<(), ProtocolError> {
     finite("gaze.t_ms", g.t_ms)?;
+    if let Some(t) = g.sample_t_ms {
+        finite("gaze.sample_t_ms", t)?;
+    }
     in_range("gaze.x", g.x, limits.gaze[0], limits.gaze[1])?;
     in_range("gaze.y", g.y, limits.gaze[0], limits.gaze[1])?;
     if let Some(p) = g.pupil_mm {
@@ -246,6 +249,7 @@ mod tests {
             x: 0.25,
             y: 1.0,
             pupil_mm: Some(3.8),
+            sample_t_ms: None,
         };
         let mut v = serde_json::to_value(g).unwrap();
         v["type"] = "gaze".into();

@@ -165,6 +165,7 @@ mod tests {
             x: 0.5,
             y: 0.5,
             pupil_mm: None,
+            sample_t_ms: None,
         }
     }
 

@@ -337,6 +337,7 @@ impl Session {
             max_in_flight: hello.max_in_flight,
             limits: state.limits.clone(),
             adapter: state.render.adapter().to_string(),
+            version: env!("CARGO_PKG_VERSION").to_string(),
             recording: self.recorder.as_ref().map(|r| {
                 let (partial, done) = r.paths();
                 state.recordings.register(self.id, partial, done)

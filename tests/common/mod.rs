@@ -125,6 +125,7 @@ pub async fn frame_intervals(c: &mut fovea::client::Client, span: Duration) -> V
             x,
             y: 0.5,
             pupil_mm: None,
+            sample_t_ms: None,
         };
         c.gaze(&g).await.unwrap();
         match c.next_event(Duration::from_secs(60)).await.unwrap() {
