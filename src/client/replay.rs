@@ -159,8 +159,12 @@ pub async fn pace(
     mut send: impl FnMut(usize, f64) -> bool,
 ) {
     for &(at_ms, index) in plan {
-        // A time no timer can hold (negative, NaN, centuries) ends the replay, never panics.
-        let Ok(at) = Duration::try_from_secs_f64(at_ms / 1000.0) else {
+        // Tokio's timers tick in whole milliseconds and wake at the first tick at or after a
+        // deadline: aiming half a tick early sends at the nearest tick instead, at most 0.5 ms
+        // off rather than up to 1 ms late. A time no timer can hold (negative, NaN,
+        // centuries) ends the replay, never panics.
+        let aim = if at_ms >= 0.5 { at_ms - 0.5 } else { at_ms };
+        let Ok(at) = Duration::try_from_secs_f64(aim / 1000.0) else {
             break;
         };
         let Some(deadline) = start.checked_add(at) else {
