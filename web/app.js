@@ -3,6 +3,7 @@
 // [u32 LE header length][JSON header][image]. Every (re)connect starts a fresh session state;
 // a lost connection is retried with backoff, and a full server is retried too.
 
+import { H264Player, h264Supported } from './h264.js';
 import { Stats, overlayText, sparkline } from './overlay.js';
 import { SyntheticEye } from './synthetic-eye.js';
 import { bindControls, controls, drawFovea, showBanner, hideBanner, setStatus } from './ui.js';
@@ -25,6 +26,8 @@ const state = {
   moves: 0,           // sessions moved to another instance after a goodbye
   moving: false,      // a goodbye came and no new session has said welcome yet
   pending: null,      // decoded frame waiting for the next animation frame
+  player: null,       // the H.264 decoder of an h264 session
+  codecNote: null,    // why the page shows another codec than the one chosen
   drawScheduled: false,
   stats: new Stats(),
   errors: [],
@@ -44,6 +47,8 @@ function ack(frame, dropped) {
 // Everything that belongs to one session starts afresh: frame numbers restart at 1.
 function resetSession() {
   if (state.pending) state.pending.bitmap.close();
+  if (state.player) state.player.close();
+  state.player = null;
   Object.assign(state, {
     welcome: null, lastHeader: null, pending: null, framesShown: 0, stats: new Stats(), waitingSince: null,
   });
@@ -76,10 +81,12 @@ export function connect() {
   state.ws = ws;
   state.connects += 1;
   setStatus('connecting…', 'connecting');
-  ws.onopen = () => {
+  ws.onopen = async () => {
+    const codec = await chooseCodec(controls.codec.value, width, height);
+    if (state.ws !== ws) return;
     send({
       type: 'hello', v: 1, scene: controls.scene.value, width, height, preset: controls.preset.value,
-      codec: controls.codec.value, quality: 85, max_in_flight: 2,
+      codec, quality: 85, max_in_flight: 2,
     });
     sendSettings();
   };
@@ -95,6 +102,17 @@ export function connect() {
       : `connection closed${ev.reason ? ` (${ev.reason})` : ''}`;
     scheduleRetry(ev.code === 1013 ? 'server full' : why, ev.code === 1013);
   };
+}
+
+// H.264 where this browser decodes it with WebCodecs (and the size is even, as 4:2:0 needs);
+// JPEG otherwise, saying why.
+async function chooseCodec(chosen, width, height) {
+  state.codecNote = null;
+  if (chosen !== 'h264') return chosen;
+  if (width % 2 === 0 && height % 2 === 0 && await h264Supported(width, height)) return 'h264';
+  state.codecNote = 'H.264 needs WebCodecs with H.264 decoding, which this browser lacks: showing JPEG';
+  showBanner(state.codecNote, 'info', 6000);
+  return 'jpeg';
 }
 
 function scheduleRetry(reason, full) {
@@ -129,6 +147,13 @@ function onText(text) {
     };
     fill(controls.scene, msg.scenes);
     fill(controls.preset, msg.presets);
+    if (msg.codec === 'h264') {
+      state.player = new H264Player(msg.width, msg.height, {
+        onPicture: present,
+        onDropped: (header) => { state.stats.dropped += 1; ack(header.frame, true); },
+        askKeyframe: () => send({ type: 'keyframe' }),
+      });
+    }
     const link = document.getElementById('recording');
     link.hidden = !msg.recording;
     if (msg.recording) link.href = msg.recording;
@@ -160,6 +185,12 @@ async function onFrame(buffer) {
   const headerLen = view.getUint32(0, true);
   const header = JSON.parse(new TextDecoder().decode(new Uint8Array(buffer, 4, headerLen)));
   state.stats.frameReceived(performance.now(), buffer.byteLength);
+  if (header.codec === 'h264') {
+    // Every frame is decoded (the next ones refer to it); drawing stays newest-first.
+    if (state.player) state.player.push(header, new Uint8Array(buffer, 4 + headerLen));
+    else ack(header.frame, true);
+    return;
+  }
   const type = header.codec === 'png' ? 'image/png' : 'image/jpeg';
   let bitmap;
   try {
@@ -169,8 +200,12 @@ async function onFrame(buffer) {
     ack(header.frame, true);
     return;
   }
-  // Draw only the newest frame; anything it overtakes is acknowledged as dropped so its
-  // credit returns to the server at once.
+  present(header, bitmap);
+}
+
+// Draw only the newest frame; anything it overtakes is acknowledged as dropped so its
+// credit returns to the server at once. `bitmap`: an ImageBitmap or a VideoFrame.
+function present(header, bitmap) {
   const newest = state.pending ? state.pending.header.frame : (state.lastHeader ? state.lastHeader.frame : 0);
   if (header.frame < newest) {
     bitmap.close();

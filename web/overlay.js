@@ -48,7 +48,7 @@ export class Stats {
     const push = (list, v) => { list.push(v); if (list.length > 120) list.shift(); };
     push(this.history.latency, this.percentile(50));
     push(this.history.fps, this.fps(nowMs));
-    push(this.history.bytes, this.bytesPerSecond(nowMs) / 1000);
+    push(this.history.bytes, this.bytesPerSecond(nowMs) * 8 / 1000);
     const s = header?.stages_ms;
     push(this.history.stages, s ? [s.queue, s.render, s.readback, s.encode] : [NaN, NaN, NaN, NaN]);
   }
@@ -57,13 +57,13 @@ export class Stats {
 const ms = (v) => (Number.isFinite(v) ? v.toFixed(1).padStart(6) : '     –');
 
 export function overlayText(stats, header, nowMs) {
-  const lines = [`fps ${String(stats.fps(nowMs)).padStart(4)}   dropped ${stats.dropped}   ${(stats.bytesPerSecond(nowMs) / 1000).toFixed(0)} kB/s`];
+  const lines = [`fps ${String(stats.fps(nowMs)).padStart(4)}   dropped ${stats.dropped}   ${(stats.bytesPerSecond(nowMs) * 8 / 1000).toFixed(0)} kbit/s`];
   lines.push(`gaze→display p50 ${ms(stats.percentile(50))} ms  p95 ${ms(stats.percentile(95))} ms`);
   if (header) {
     const s = header.stages_ms;
     lines.push(`server queue ${ms(s.queue)} render ${ms(s.render)}`);
     lines.push(`       readback ${ms(s.readback)} encode ${ms(s.encode)} ms`);
-    lines.push(`frame ${header.frame} (${header.trigger ?? 'gaze'})  ${header.width}×${header.height} ${header.codec}`);
+    lines.push(`frame ${header.frame} (${header.trigger ?? 'gaze'})  ${header.width}×${header.height} ${header.codec}${header.keyframe ? ' (key)' : ''}`);
     lines.push(`shaded ${(100 * header.sampled).toFixed(1)}%  gaze ${header.gaze.x.toFixed(3)}, ${header.gaze.y.toFixed(3)}`);
     const gi = header.radiosity;
     if (gi) {

@@ -1,4 +1,7 @@
-//! Image encoding of read-back frames: JPEG for streaming, PNG when frames must compare exactly.
+//! Image encoding of read-back frames: JPEG for streaming, PNG when frames must compare
+//! exactly, H.264 (per session, `h264`) when bytes matter.
+
+pub mod h264;
 
 use crate::protocol::Codec;
 
@@ -17,6 +20,12 @@ pub enum EncodeError {
     Jpeg(#[from] jpeg_encoder::EncodingError),
     #[error("PNG encoding failed: {0}")]
     Png(#[from] png::EncodingError),
+    #[error("H.264 encoding failed: {0}")]
+    H264(String),
+    #[error("H.264 frames need an even width and height, got {0}x{1}")]
+    OddSize(u32, u32),
+    #[error("H.264 frames are encoded by the session's own stream, not one at a time")]
+    NeedsStream,
 }
 
 /// Encodes tightly packed sRGB RGBA8 pixels. `quality` (1–100) applies to JPEG only.
@@ -39,6 +48,7 @@ pub fn encode(
     match codec {
         Codec::Jpeg => encode_jpeg(rgba, width, height, quality),
         Codec::Png => encode_png(rgba, width, height),
+        Codec::H264 => Err(EncodeError::NeedsStream),
     }
 }
 

@@ -55,6 +55,12 @@ pub struct FrameHeader {
     pub width: u32,
     pub height: u32,
     pub codec: Codec,
+    /// H.264 only: whether this frame is a keyframe (IDR) a decoder can start from.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub keyframe: Option<bool>,
+    /// The encoded image's size in bytes (what follows the header).
+    #[serde(default)]
+    pub bytes: usize,
     /// Fraction of pixels shaded this frame (1.0 without foveation).
     pub sampled: f64,
     /// Gaze samples the session had received when this frame was made (lost = sent − this).
@@ -137,6 +143,8 @@ mod tests {
             width: 64,
             height: 48,
             codec: Codec::Png,
+            keyframe: None,
+            bytes: 3,
             sampled: 1.0,
             samples: 17,
             stages_ms: StageTimes {

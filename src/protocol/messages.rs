@@ -23,9 +23,15 @@ pub struct Hello {
     pub display: Display,
     #[serde(default)]
     pub codec: Codec,
-    /// JPEG quality 1–100; ignored for PNG.
+    /// JPEG quality 1–100; ignored for PNG and H.264.
     #[serde(default = "default_quality")]
     pub quality: u8,
+    /// H.264 bitrate, kbit/s (default 4000); ignored by the other codecs.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub bitrate_kbps: Option<u32>,
+    /// H.264: a keyframe at least every this many seconds (default 2).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub keyframe_s: Option<f64>,
     /// Frames the server may have sent that the client has not acknowledged yet.
     #[serde(default = "default_in_flight")]
     pub max_in_flight: u32,
@@ -42,6 +48,8 @@ impl Default for Hello {
             display: Display::default(),
             codec: Codec::default(),
             quality: default_quality(),
+            bitrate_kbps: None,
+            keyframe_s: None,
             max_in_flight: default_in_flight(),
         }
     }
@@ -76,6 +84,8 @@ pub enum Codec {
     Jpeg,
     /// Lossless, so frames can be compared exactly.
     Png,
+    /// H.264 Annex B, baseline profile, one stream per session (see docs/protocol.md).
+    H264,
 }
 
 /// One eye-tracker sample. `t_ms` is on the client's own clock; the server echoes it so the

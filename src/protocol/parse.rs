@@ -12,6 +12,8 @@ pub enum ClientMessage {
     Ack(Ack),
     Settings(SettingsPatch),
     Camera(CameraMove),
+    /// The next H.264 frame should be a keyframe (the client's decoder failed or restarted).
+    Keyframe,
 }
 
 /// Parses and validates one text message. Scene and preset names are checked by the session,
@@ -34,21 +36,20 @@ pub fn parse_client_message(text: &str, limits: &Limits) -> Result<ClientMessage
             "a message must be a JSON object",
         ));
     };
-    let kind = match map.remove("type") {
-        Some(Value::String(kind)) => kind,
-        Some(_) => {
-            return Err(ProtocolError::new(
+    let kind =
+        match map.remove("type") {
+            Some(Value::String(kind)) => kind,
+            Some(_) => {
+                return Err(ProtocolError::new(
+                    ErrorCode::MissingType,
+                    "`type` must be a string",
+                ))
+            }
+            None => return Err(ProtocolError::new(
                 ErrorCode::MissingType,
-                "`type` must be a string",
-            ))
-        }
-        None => {
-            return Err(ProtocolError::new(
-                ErrorCode::MissingType,
-                "message has no `type` (expected hello, gaze, ack, settings or camera)",
-            ))
-        }
-    };
+                "message has no `type` (expected hello, gaze, ack, settings, camera or keyframe)",
+            )),
+        };
     match kind.as_str() {
         "hello" => {
             let hello: Hello = fields(map, "hello")?;
@@ -77,14 +78,23 @@ pub fn parse_client_message(text: &str, limits: &Limits) -> Result<ClientMessage
             validate_camera(&m)?;
             Ok(ClientMessage::Camera(m))
         }
+        "keyframe" => {
+            let _: NoFields = fields(map, "keyframe")?;
+            Ok(ClientMessage::Keyframe)
+        }
         other => Err(ProtocolError::new(
             ErrorCode::UnknownType,
             format!(
-                "unknown message type {other:?} (expected hello, gaze, ack, settings or camera)"
+                "unknown message type {other:?} (expected hello, gaze, ack, settings, camera or keyframe)"
             ),
         )),
     }
 }
+
+/// A message with nothing but its type.
+#[derive(serde::Deserialize)]
+#[serde(deny_unknown_fields)]
+struct NoFields {}
 
 fn fields<T: DeserializeOwned>(map: Map<String, Value>, kind: &str) -> Result<T, ProtocolError> {
     serde_json::from_value(Value::Object(map))
@@ -158,6 +168,22 @@ fn validate_hello(h: &Hello, limits: &Limits) -> Result<(), ProtocolError> {
     in_range("display.width_cm", h.display.width_cm, 1.0, 1000.0)?;
     in_range("display.distance_cm", h.display.distance_cm, 1.0, 10_000.0)?;
     in_range("quality", f64::from(h.quality), 1.0, 100.0)?;
+    if let Some(k) = h.bitrate_kbps {
+        let (lo, hi) = crate::encode::h264::KBPS_RANGE;
+        in_range("bitrate_kbps", f64::from(k), f64::from(lo), f64::from(hi))?;
+    }
+    if let Some(s) = h.keyframe_s {
+        in_range("keyframe_s", s, 0.1, 60.0)?;
+    }
+    if h.codec == super::Codec::H264 && (h.width % 2 != 0 || h.height % 2 != 0) {
+        return Err(ProtocolError::new(
+            ErrorCode::OutOfRange,
+            format!(
+                "h264 frames need an even width and height (4:2:0 chroma), got {}x{}",
+                h.width, h.height
+            ),
+        ));
+    }
     in_range(
         "max_in_flight",
         f64::from(h.max_in_flight),

@@ -17,6 +17,11 @@ const FILES: &[(&str, &str, &[u8])] = &[
         include_bytes!("../../web/overlay.js"),
     ),
     (
+        "/h264.js",
+        "text/javascript; charset=utf-8",
+        include_bytes!("../../web/h264.js"),
+    ),
+    (
         "/ui.js",
         "text/javascript; charset=utf-8",
         include_bytes!("../../web/ui.js"),

@@ -2,11 +2,13 @@
 //! binary message with its header. The header's stage times come from the frame's one timing
 //! record ([`FrameTimes`]).
 
+use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
 
 use super::pacing::Ticket;
 use super::timing::FrameTimes;
 use crate::encode;
+use crate::encode::h264::H264Stream;
 use crate::protocol::{
     encode_frame, Codec, ErrorCode, FrameHeader, GazeUsed, ProtocolError, SolveProgress,
 };
@@ -21,6 +23,8 @@ pub struct FrameJob {
     pub request: FrameRequest,
     pub codec: Codec,
     pub quality: u8,
+    /// The session's H.264 stream, for `h264` sessions.
+    pub h264: Option<Arc<Mutex<H264Stream>>>,
 }
 
 /// A frame ready for the socket.
@@ -61,14 +65,24 @@ pub async fn make(render: RenderHandle, job: FrameJob) -> Result<MadeFrame, Fram
     );
     let (codec, quality, w, h) = (job.codec, job.quality, frame.width, frame.height);
     let rgba = frame.rgba;
+    let stream = job.h264.clone();
     let encoded = tokio::task::spawn_blocking(move || {
         let _span = tracing::debug_span!("encode", frame = frame_no).entered();
         let start = Instant::now();
-        encode::encode(&rgba, w, h, codec, quality).map(|bytes| (bytes, start, Instant::now()))
+        let out = match (codec, stream) {
+            (Codec::H264, Some(stream)) => stream
+                .lock()
+                .map_err(|_| encode::EncodeError::H264("the stream's lock was poisoned".into()))
+                .and_then(|mut s| s.encode(&rgba, w, h))
+                .map(|f| (f.bytes, Some(f.keyframe))),
+            _ => encode::encode(&rgba, w, h, codec, quality).map(|b| (b, None)),
+        };
+        out.map(|(bytes, key)| (bytes, key, start, Instant::now()))
     })
     .await
     .map_err(|e| failed("encoder task", &e))?;
-    let (image, encode_start, encode_end) = encoded.map_err(|e| failed("encode", &e))?;
+    let (image, keyframe, encode_start, encode_end) = encoded.map_err(|e| failed("encode", &e))?;
+    ::metrics::counter!("fovea_frame_bytes_total").increment(image.len() as u64);
     times.encode_start = encode_start;
     times.encode_end = encode_end;
     let used = |[x, y]: [f32; 2]| GazeUsed {
@@ -86,6 +100,8 @@ pub async fn make(render: RenderHandle, job: FrameJob) -> Result<MadeFrame, Fram
         width: w,
         height: h,
         codec,
+        keyframe,
+        bytes: image.len(),
         sampled: frame.sampled,
         samples: t.samples,
         stages_ms: times.stages(),

@@ -17,6 +17,7 @@ use super::pacing::Pacer;
 use super::recorder::Recorder;
 use super::timing::FrameTimes;
 use super::ServerState;
+use crate::encode::h264::{H264Config, H264Stream};
 use crate::gaze::prediction::Predictor;
 use crate::protocol::{
     ClientMessage, ErrorCode, Gaze, Hello, ProtocolError, ServerMessage, Welcome, PROTOCOL_VERSION,
@@ -48,6 +49,8 @@ struct Session {
     camera: Option<crate::scene::Camera>,
     /// Kinds of frame failure the client has been told of.
     failures_told: std::collections::HashSet<String>,
+    /// The H.264 stream of an `h264` session: frames are encoded in order, one at a time.
+    h264: Option<Arc<std::sync::Mutex<H264Stream>>>,
 }
 
 pub async fn run(socket: WebSocket, state: Arc<ServerState>, id: u64) {
@@ -190,6 +193,7 @@ impl Session {
             recorder,
             camera: None,
             failures_told: Default::default(),
+            h264: None,
         }
     }
 
@@ -242,6 +246,15 @@ impl Session {
                 }
                 Err(e) => Some(knob_error(e)),
             },
+            ClientMessage::Keyframe => {
+                // Every JPEG or PNG frame is a keyframe already. The new frame shows the last
+                // gaze again, as after a settings change.
+                if let Some(Ok(mut stream)) = self.h264.as_ref().map(|s| s.lock()) {
+                    stream.ask_keyframe();
+                    pacer.on_settings(now);
+                }
+                None
+            }
             ClientMessage::Camera(m) => {
                 let scene = self.hello.as_ref().map(|h| h.scene.as_str()).unwrap_or("");
                 let base = self.state.cameras.get(scene).copied()?;
@@ -345,6 +358,15 @@ impl Session {
         };
         let viewing = Viewing::new(hello.display, hello.width, hello.height);
         self.predictor = Some(Predictor::new(viewing.field_of_view_deg()));
+        self.h264 = (hello.codec == crate::protocol::Codec::H264).then(|| {
+            let defaults = H264Config::default();
+            Arc::new(std::sync::Mutex::new(H264Stream::new(H264Config {
+                kbps: hello.bitrate_kbps.unwrap_or(defaults.kbps),
+                keyframe_every: hello
+                    .keyframe_s
+                    .map_or(defaults.keyframe_every, Duration::from_secs_f64),
+            })))
+        });
         self.pacer = Some(Pacer::new(hello.max_in_flight, state.stall_timeout, now));
         self.settings = Settings::of(preset);
         self.started = Some(now);
@@ -390,6 +412,7 @@ impl Session {
             request,
             codec: hello.codec,
             quality: hello.quality,
+            h264: self.h264.clone(),
         })
     }
 

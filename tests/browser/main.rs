@@ -147,6 +147,74 @@ async fn switching_scene_size_and_codec_keeps_showing_frames() {
     f.finish();
 }
 
+/// H.264 decoded by the browser's WebCodecs: the canvas shows the scene, P-frames follow the
+/// gaze, and a decoder restart (what an error does) asks for a keyframe and recovers.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn h264_frames_decode_with_webcodecs_and_the_canvas_shows_the_scene() {
+    let f = Fixture::start(&[]).await;
+    let page = f.page().await;
+    eval(&page, "(() => { const s = document.getElementById('codec'); s.value = 'h264'; s.dispatchEvent(new Event('change')); return true; })()").await;
+    wait_for(
+        &page,
+        "window.fovea.lastHeader && window.fovea.lastHeader.codec === 'h264' && window.fovea.player && window.fovea.player.decoded >= 1",
+        30,
+    )
+    .await;
+    assert_eq!(
+        eval(&page, "window.fovea.codecNote").await,
+        Value::Null,
+        "no fallback"
+    );
+    for (x, y) in [(0.3, 0.4), (0.6, 0.5), (0.45, 0.6)] {
+        let shown = eval(&page, "window.fovea.framesShown")
+            .await
+            .as_u64()
+            .unwrap();
+        gaze_at(&page, x, y).await;
+        wait_for(&page, &format!("window.fovea.framesShown > {shown}"), 20).await;
+    }
+    let colours: u64 = serde_json::from_value(eval(&page, COLOURS).await).unwrap();
+    assert!(
+        colours > 50,
+        "the decoded frame shows the scene ({colours} colours)"
+    );
+    let mix = eval(
+        &page,
+        "[window.fovea.player.decoded, window.fovea.player.keyframes]",
+    )
+    .await;
+    let (decoded, keys) = (mix[0].as_u64().unwrap(), mix[1].as_u64().unwrap());
+    assert!(
+        keys >= 1 && decoded > keys,
+        "P-frames between keyframes: {mix}"
+    );
+    screenshot(&page, "h264").await;
+    // A decoder error restarts the decoder, which needs a keyframe: it asks, and frames go on.
+    let decoded = eval(&page, "window.fovea.player.decoded")
+        .await
+        .as_u64()
+        .unwrap();
+    eval(
+        &page,
+        "(() => { window.fovea.player.restart(); return true; })()",
+    )
+    .await;
+    gaze_at(&page, 0.5, 0.5).await;
+    wait_for(
+        &page,
+        &format!("window.fovea.player.decoded > {decoded}"),
+        20,
+    )
+    .await;
+    assert_eq!(
+        eval(&page, "window.fovea.player.errors").await,
+        Value::from(0)
+    );
+    assert!(eval(&page, "window.fovea.errors.length").await == Value::from(0));
+    drop(page);
+    f.finish();
+}
+
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn the_page_reconnects_after_the_server_restarts() {
     let mut f = Fixture::start(&[]).await;

@@ -1,0 +1,179 @@
+//! H.264 for one session: an openh264 encoder that outputs every frame at once (no B-frames,
+//! no frame skipping, no reordering: a browser's WebCodecs decoder shows each frame as it
+//! arrives), a keyframe at the start, on request, after a size change and every
+//! `keyframe_every`, constant bitrate.
+//!
+//! Frames are converted from RGBA with openh264's BT.601 limited-range conversion and the
+//! stream's VUI says so, so decoders turn them back into the same colours. openh264 built
+//! from source (the default) is not covered by Cisco's patent licence; building with the
+//! `openh264-libloading` feature loads Cisco's binary instead (see README, "Licences").
+
+use std::time::{Duration, Instant};
+
+use openh264::encoder::{
+    BitRate, Encoder, EncoderConfig, FrameRate, FrameType, Profile, RateControlMode,
+    SpsPpsStrategy, UsageType, VuiConfig,
+};
+use openh264::formats::{RgbaSliceU8, YUVBuffer};
+use openh264::OpenH264API;
+
+use super::EncodeError;
+
+/// The bitrate a session gets when its hello names none, kbit/s (about 0.06 bits per pixel
+/// of 1280×720 at 60 fps).
+pub const DEFAULT_KBPS: u32 = 4000;
+/// The bitrates a session may ask for, kbit/s.
+pub const KBPS_RANGE: (u32, u32) = (100, 50_000);
+/// A keyframe at least this often by default, so a client that joins or loses a frame
+/// recovers within it.
+pub const DEFAULT_KEYFRAME_S: f64 = 2.0;
+
+/// H.264 settings of one stream.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct H264Config {
+    pub kbps: u32,
+    pub keyframe_every: Duration,
+}
+
+impl Default for H264Config {
+    fn default() -> Self {
+        H264Config {
+            kbps: DEFAULT_KBPS,
+            keyframe_every: Duration::from_secs_f64(DEFAULT_KEYFRAME_S),
+        }
+    }
+}
+
+/// The openh264 to use: Cisco's binary named by `FOVEA_OPENH264_LIB` when built with the
+/// `openh264-libloading` feature, else the one built from source.
+fn api() -> Result<OpenH264API, EncodeError> {
+    #[cfg(feature = "openh264-libloading")]
+    if let Some(path) = std::env::var_os("FOVEA_OPENH264_LIB") {
+        // SAFETY: the library is Cisco's openh264 build, named by whoever runs the server;
+        // loading it runs its initialisers, which is what it is for.
+        return unsafe { OpenH264API::from_blob_path_unchecked(&path) }
+            .map_err(|e| EncodeError::H264(format!("loading {}: {e}", path.to_string_lossy())));
+    }
+    Ok(OpenH264API::from_source())
+}
+
+/// One session's encoder and its keyframe bookkeeping.
+pub struct H264Stream {
+    config: H264Config,
+    encoder: Option<Encoder>,
+    size: (u32, u32),
+    last_keyframe: Option<Instant>,
+    keyframe_asked: bool,
+}
+
+/// One encoded frame: Annex B NAL units.
+#[derive(Debug, Clone)]
+pub struct H264Frame {
+    pub bytes: Vec<u8>,
+    pub keyframe: bool,
+}
+
+impl std::fmt::Debug for H264Stream {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("H264Stream")
+            .field("config", &self.config)
+            .field("size", &self.size)
+            .field("keyframe_asked", &self.keyframe_asked)
+            .finish_non_exhaustive()
+    }
+}
+
+impl H264Stream {
+    pub fn new(config: H264Config) -> H264Stream {
+        H264Stream {
+            config,
+            encoder: None,
+            size: (0, 0),
+            last_keyframe: None,
+            keyframe_asked: true,
+        }
+    }
+
+    /// The next frame is a keyframe (a client's decoder failed, or it resized).
+    pub fn ask_keyframe(&mut self) {
+        self.keyframe_asked = true;
+    }
+
+    /// New settings apply from the next frame, which is a keyframe.
+    pub fn reconfigure(&mut self, config: H264Config) {
+        if config != self.config {
+            self.config = config;
+            self.encoder = None;
+        }
+    }
+
+    /// Makes the encoder for this size and settings if there is none (a new one starts with a
+    /// keyframe).
+    fn ensure_encoder(&mut self, width: u32, height: u32) -> Result<(), EncodeError> {
+        if self.size != (width, height) {
+            self.encoder = None;
+        }
+        if self.encoder.is_none() {
+            let config = EncoderConfig::new()
+                .bitrate(BitRate::from_bps(self.config.kbps.saturating_mul(1000)))
+                .max_frame_rate(FrameRate::from_hz(60.0))
+                .rate_control_mode(RateControlMode::Bitrate)
+                .usage_type(UsageType::CameraVideoRealTime)
+                .profile(Profile::Baseline)
+                .sps_pps_strategy(SpsPpsStrategy::ConstantId)
+                .skip_frames(false)
+                .num_threads(1)
+                .vui(VuiConfig::bt601());
+            let encoder = Encoder::with_api_config(api()?, config)
+                .map_err(|e| EncodeError::H264(e.to_string()))?;
+            self.encoder = Some(encoder);
+            self.size = (width, height);
+            self.keyframe_asked = true;
+        }
+        Ok(())
+    }
+
+    /// Encodes tightly packed RGBA8 pixels of even width and height.
+    pub fn encode(
+        &mut self,
+        rgba: &[u8],
+        width: u32,
+        height: u32,
+    ) -> Result<H264Frame, EncodeError> {
+        if width % 2 != 0 || height % 2 != 0 || width == 0 || height == 0 {
+            return Err(EncodeError::OddSize(width, height));
+        }
+        let now = Instant::now();
+        let due = self
+            .last_keyframe
+            .is_none_or(|t| now.duration_since(t) >= self.config.keyframe_every);
+        let yuv =
+            YUVBuffer::from_rgba8_source(RgbaSliceU8::new(rgba, (width as usize, height as usize)));
+        self.ensure_encoder(width, height)?;
+        let ask = self.keyframe_asked || due;
+        let Some(encoder) = self.encoder.as_mut() else {
+            return Err(EncodeError::H264("no encoder".into()));
+        };
+        if ask {
+            encoder.force_intra_frame();
+        }
+        let stream = encoder
+            .encode(&yuv)
+            .map_err(|e| EncodeError::H264(e.to_string()))?;
+        // Only an IDR frame lets a decoder start (WebCodecs wants one after configure).
+        let keyframe = stream.frame_type() == FrameType::IDR;
+        let bytes = stream.to_vec();
+        if bytes.is_empty() {
+            // A skipped frame would leave the client waiting: skipping is off, so this is a fault.
+            return Err(EncodeError::H264(format!(
+                "the encoder returned no data ({:?})",
+                stream.frame_type()
+            )));
+        }
+        if keyframe {
+            self.last_keyframe = Some(now);
+            self.keyframe_asked = false;
+        }
+        Ok(H264Frame { bytes, keyframe })
+    }
+}

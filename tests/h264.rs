@@ -1,0 +1,167 @@
+//! H.264 frames: a rendered frame survives encode → decode (openh264's own decoder), keyframes
+//! come when asked and when due, and a session streams them with the header saying which are
+//! keyframes; bad requests get errors and the server lives.
+
+use std::time::Duration;
+
+use fovea::client::{Client, Event};
+use fovea::encode::h264::{H264Config, H264Stream};
+use fovea::protocol::{Ack, Codec, ErrorCode, Gaze, Hello};
+use fovea::render::{FrameRequest, Renderer};
+use openh264::decoder::Decoder;
+use openh264::formats::YUVSource;
+
+mod common;
+
+fn psnr(a: &[u8], b: &[u8]) -> f64 {
+    let (mut sum, mut n) = (0.0, 0usize);
+    for (pa, pb) in a.chunks_exact(4).zip(b.chunks_exact(4)) {
+        for c in 0..3 {
+            sum += (f64::from(pa[c]) - f64::from(pb[c])).powi(2);
+            n += 1;
+        }
+    }
+    10.0 * (255.0f64.powi(2) / (sum / n as f64)).log10()
+}
+
+fn decode(decoder: &mut Decoder, bytes: &[u8]) -> Vec<u8> {
+    let yuv = decoder
+        .decode(bytes)
+        .expect("decodes")
+        .expect("a picture per frame: nothing is held back");
+    let (w, h) = yuv.dimensions();
+    let mut rgba = vec![0; w * h * 4];
+    yuv.write_rgba8(&mut rgba);
+    rgba
+}
+
+#[test]
+fn a_rendered_frame_round_trips_above_35_db_and_keyframes_come_when_asked() {
+    let mut renderer = Renderer::new().unwrap_or_else(|e| panic!("GPU tests need an adapter: {e}"));
+    let (w, h) = (320, 240);
+    let mut frames = Vec::new();
+    for x in [0.3, 0.35, 0.4, 0.45] {
+        let mut req = FrameRequest::new("bunny", w, h);
+        req.gaze = [x, 0.5];
+        frames.push(renderer.render(&req).unwrap().rgba);
+    }
+    let mut stream = H264Stream::new(H264Config {
+        kbps: 2000,
+        keyframe_every: Duration::from_secs(3600),
+    });
+    let mut decoder = Decoder::new().unwrap();
+    let mut keys = Vec::new();
+    for (i, rgba) in frames.iter().enumerate() {
+        if i == 3 {
+            stream.ask_keyframe();
+        }
+        let f = stream.encode(rgba, w, h).unwrap();
+        keys.push(f.keyframe);
+        let back = decode(&mut decoder, &f.bytes);
+        let db = psnr(rgba, &back);
+        assert!(db >= 35.0, "frame {i}: {db:.1} dB");
+    }
+    assert_eq!(
+        keys,
+        [true, false, false, true],
+        "first frame and the asked one"
+    );
+    // A size change starts over with a keyframe; odd sizes are refused, not a panic.
+    let small: Vec<u8> = frames[0].iter().copied().take(160 * 120 * 4).collect();
+    assert!(stream.encode(&small, 160, 120).unwrap().keyframe);
+    assert!(stream.encode(&small[..159 * 120 * 4], 159, 120).is_err());
+    // Keyframes when due: every frame with a zero interval.
+    let mut every = H264Stream::new(H264Config {
+        kbps: 2000,
+        keyframe_every: Duration::ZERO,
+    });
+    assert!((0..3).all(|_| every.encode(&frames[0], w, h).unwrap().keyframe));
+}
+
+async fn next_frame(c: &mut Client) -> fovea::protocol::FrameHeader {
+    loop {
+        match c.next_event(Duration::from_secs(60)).await {
+            Ok(Event::Frame { header, image }) => {
+                assert_eq!(
+                    header.bytes,
+                    image.len(),
+                    "the header says the image's size"
+                );
+                let ack = Ack {
+                    frame: header.frame,
+                    t_ms: None,
+                    dropped: false,
+                };
+                c.ack(&ack).await.unwrap();
+                return header;
+            }
+            Ok(Event::Error(e)) => panic!("error {e:?}"),
+            Ok(_) => continue,
+            Err(e) => panic!("no frame: {e}"),
+        }
+    }
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn an_h264_session_streams_keyframes_on_request_and_bad_requests_are_told() {
+    let (addr, running) = common::start(Default::default()).await;
+    let url = format!("ws://{addr}/ws");
+    let hello = Hello {
+        scene: "bunny".into(),
+        width: 96,
+        height: 64,
+        preset: "fast".into(),
+        codec: Codec::H264,
+        bitrate_kbps: Some(500),
+        ..Hello::default()
+    };
+    let mut c = Client::connect(&url).await.unwrap();
+    let welcome = c.hello(&hello).await.unwrap();
+    assert_eq!(welcome.codec, Codec::H264);
+    let first = next_frame(&mut c).await;
+    assert_eq!((first.codec, first.keyframe), (Codec::H264, Some(true)));
+    let gaze = |seq: u64| Gaze {
+        seq,
+        t_ms: seq as f64,
+        x: 0.3 + 0.05 * seq as f64,
+        y: 0.5,
+        pupil_mm: None,
+        sample_t_ms: None,
+    };
+    c.gaze(&gaze(1)).await.unwrap();
+    assert_eq!(next_frame(&mut c).await.keyframe, Some(false));
+    c.send_text(r#"{"type":"keyframe"}"#).await.unwrap();
+    assert_eq!(next_frame(&mut c).await.keyframe, Some(true), "asked for");
+    c.gaze(&gaze(2)).await.unwrap();
+    assert_eq!(next_frame(&mut c).await.keyframe, Some(false));
+
+    // An odd size and an unknown codec are refused with a reason; the server goes on.
+    let mut odd = Client::connect(&url).await.unwrap();
+    let refused = odd
+        .hello(&Hello {
+            width: 95,
+            ..hello.clone()
+        })
+        .await
+        .unwrap_err();
+    assert!(refused.to_string().contains("even"), "{refused}");
+    let mut unknown = Client::connect(&url).await.unwrap();
+    unknown
+        .send_text(r#"{"type":"hello","codec":"vp9","width":96,"height":64}"#)
+        .await
+        .unwrap();
+    match unknown.next_event(Duration::from_secs(10)).await {
+        Ok(Event::Error(e)) => {
+            assert_eq!(e.code, ErrorCode::BadField);
+            assert!(e.message.contains("vp9"), "{}", e.message);
+        }
+        other => panic!("expected an error, got {other:?}"),
+    }
+    c.gaze(&gaze(3)).await.unwrap();
+    assert_eq!(
+        next_frame(&mut c).await.codec,
+        Codec::H264,
+        "the first session goes on"
+    );
+    running.stop().await;
+}
