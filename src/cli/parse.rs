@@ -73,3 +73,9 @@ pub fn number_in(s: &str, lo: f64, hi: f64) -> Result<f64, String> {
     }
     Ok(v)
 }
+
+/// A frame codec by its protocol name.
+pub fn codec(s: &str) -> Result<fovea::protocol::Codec, String> {
+    serde_json::from_value(serde_json::Value::String(s.to_string()))
+        .map_err(|_| format!("unknown codec {s:?} (jpeg, png, h264)"))
+}

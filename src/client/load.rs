@@ -65,6 +65,9 @@ pub struct LoadReport {
     pub frames: u64,
     pub fps_total: f64,
     pub fps_per_session: Vec<f64>,
+    /// Image bitrate each session received, kbit/s, and all together.
+    pub kbit_s_per_session: Vec<f64>,
+    pub kbit_s_total: f64,
     pub fps_min: f64,
     pub fps_max: f64,
     /// Slowest session's fps over the fastest's (1 is perfectly fair).
@@ -102,6 +105,8 @@ pub struct LoadReport {
 #[derive(Default)]
 struct SessionResult {
     frames: u64,
+    /// Image bytes received (the frame headers' `bytes`).
+    bytes: u64,
     answered: u64,
     active_s: f64,
     gaze_sent: u64,
@@ -162,7 +167,14 @@ pub async fn run(
         .iter()
         .fold((f64::INFINITY, 0.0f64), |(a, b), v| (a.min(*v), b.max(*v)));
     let frames: u64 = results.iter().map(|r| r.frames).sum();
+    let kbit_s: Vec<f64> = results
+        .iter()
+        .filter(|r| !r.connect_failed && !r.refused)
+        .map(|r| r.bytes as f64 * 8.0 / 1000.0 / r.active_s.max(1e-9))
+        .collect();
     LoadReport {
+        kbit_s_total: results.iter().map(|r| r.bytes).sum::<u64>() as f64 * 8.0 / 1000.0 / seconds.max(1e-9),
+        kbit_s_per_session: kbit_s,
         sessions: opts.sessions,
         seconds,
         rate_hz: opts.rate_hz,
@@ -245,7 +257,7 @@ async fn session(
     let reader = {
         let (sent_at, hists, timeline) = (sent_at.clone(), hists.clone(), timeline.clone());
         tokio::spawn(async move {
-            let (mut frames, mut errors, mut answered) = (0u64, 0u64, 0u64);
+            let (mut frames, mut errors, mut answered, mut bytes) = (0u64, 0u64, 0u64, 0u64);
             while let Some(event) = events.recv().await {
                 let h = match event {
                     LinkEvent::Frame { header, .. } => header,
@@ -256,6 +268,7 @@ async fn session(
                 };
                 let now = session_start.elapsed().as_secs_f64() * 1e3;
                 frames += 1;
+                bytes += h.bytes as u64;
                 answered += u64::from(h.seq.is_some());
                 if let Ok(mut t) = timeline.lock() {
                     let s = started.elapsed().as_secs() as usize;
@@ -288,7 +301,7 @@ async fn session(
                     rec("encode", h.stages_ms.encode);
                 }
             }
-            (frames, errors, answered)
+            (frames, errors, answered, bytes)
         })
     };
     let viewing = Viewing {
@@ -358,10 +371,11 @@ async fn session(
     result.reconnects = link.reconnects;
     result.gaps_ms = link.gaps_ms;
     result.ended = link.ended;
-    if let Ok(Ok((frames, errors, answered))) =
+    if let Ok(Ok((frames, errors, answered, bytes))) =
         tokio::time::timeout(Duration::from_secs(10), reader).await
     {
         result.frames = frames;
+        result.bytes = bytes;
         result.errors += errors;
         result.answered = answered;
     }

@@ -91,6 +91,9 @@ pub struct ReplaySummary {
     pub latency_p95_ms: f64,
     pub latency_p99_ms: f64,
     pub seconds: f64,
+    /// Image bytes received, and their rate over the replay, kbit/s.
+    pub bytes: u64,
+    pub kbit_s: f64,
     /// What the server granted, for the provenance of the figures.
     pub server: ServerInfo,
 }
@@ -335,6 +338,10 @@ pub async fn replay(
         latency_p95_ms: percentile(&mut latencies, 0.95),
         latency_p99_ms: percentile(&mut latencies, 0.99),
         seconds: clock.elapsed().as_secs_f64(),
+        bytes: frames.iter().map(|f| f.bytes as u64).sum(),
+        kbit_s: frames.iter().map(|f| f.bytes as f64).sum::<f64>() * 8.0
+            / 1000.0
+            / clock.elapsed().as_secs_f64().max(1e-9),
         server: ServerInfo {
             version: welcome.version,
             adapter: welcome.adapter,

@@ -15,7 +15,7 @@ use openh264::encoder::{
     SpsPpsStrategy, UsageType, VuiConfig,
 };
 use openh264::formats::{RgbaSliceU8, YUVBuffer};
-use openh264::OpenH264API;
+use openh264::{OpenH264API, Timestamp};
 
 use super::EncodeError;
 
@@ -64,6 +64,9 @@ pub struct H264Stream {
     size: (u32, u32),
     last_keyframe: Option<Instant>,
     keyframe_asked: bool,
+    /// The stream's clock: rate control spends bits by the time between frames.
+    started: Instant,
+    last_ms: u64,
 }
 
 /// One encoded frame: Annex B NAL units.
@@ -91,6 +94,8 @@ impl H264Stream {
             size: (0, 0),
             last_keyframe: None,
             keyframe_asked: true,
+            started: Instant::now(),
+            last_ms: 0,
         }
     }
 
@@ -133,12 +138,20 @@ impl H264Stream {
         Ok(())
     }
 
-    /// Encodes tightly packed RGBA8 pixels of even width and height.
-    pub fn encode(
+    /// Encodes tightly packed RGBA8 pixels of even width and height, timed by the wall clock.
+    pub fn encode(&mut self, rgba: &[u8], width: u32, height: u32) -> Result<H264Frame, EncodeError> {
+        let ms = self.started.elapsed().as_millis() as u64;
+        self.encode_at(rgba, width, height, ms)
+    }
+
+    /// Encodes a frame shown `ms` after the stream's first. Rate control spends the bitrate
+    /// over the time between frames, so frames at one timestamp would get almost no bits.
+    pub fn encode_at(
         &mut self,
         rgba: &[u8],
         width: u32,
         height: u32,
+        ms: u64,
     ) -> Result<H264Frame, EncodeError> {
         if width % 2 != 0 || height % 2 != 0 || width == 0 || height == 0 {
             return Err(EncodeError::OddSize(width, height));
@@ -157,8 +170,11 @@ impl H264Stream {
         if ask {
             encoder.force_intra_frame();
         }
+        // Strictly increasing, as rate control expects.
+        let ms = ms.max(self.last_ms + 1);
+        self.last_ms = ms;
         let stream = encoder
-            .encode(&yuv)
+            .encode_at(&yuv, Timestamp::from_millis(ms))
             .map_err(|e| EncodeError::H264(e.to_string()))?;
         // Only an IDR frame lets a decoder start (WebCodecs wants one after configure).
         let keyframe = stream.frame_type() == FrameType::IDR;

@@ -1,6 +1,7 @@
 //! Image encoding of read-back frames: JPEG for streaming, PNG when frames must compare
 //! exactly, H.264 (per session, `h264`) when bytes matter.
 
+pub mod foveated;
 pub mod h264;
 
 use crate::protocol::Codec;

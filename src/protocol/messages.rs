@@ -32,6 +32,9 @@ pub struct Hello {
     /// H.264: a keyframe at least every this many seconds (default 2).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub keyframe_s: Option<f64>,
+    /// Low-pass the periphery to what the eye resolves there before encoding (any codec).
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub foveated_encoding: bool,
     /// Frames the server may have sent that the client has not acknowledged yet.
     #[serde(default = "default_in_flight")]
     pub max_in_flight: u32,
@@ -50,6 +53,7 @@ impl Default for Hello {
             quality: default_quality(),
             bitrate_kbps: None,
             keyframe_s: None,
+            foveated_encoding: false,
             max_in_flight: default_in_flight(),
         }
     }

@@ -8,7 +8,9 @@ use std::time::{Duration, Instant};
 use super::pacing::Ticket;
 use super::timing::FrameTimes;
 use crate::encode;
+use crate::encode::foveated::{self, LowPass};
 use crate::encode::h264::H264Stream;
+use crate::viewing::Viewing;
 use crate::protocol::{
     encode_frame, Codec, ErrorCode, FrameHeader, GazeUsed, ProtocolError, SolveProgress,
 };
@@ -25,6 +27,8 @@ pub struct FrameJob {
     pub quality: u8,
     /// The session's H.264 stream, for `h264` sessions.
     pub h264: Option<Arc<Mutex<H264Stream>>>,
+    /// Foveated encoding: the low-pass and the viewing geometry it is judged in.
+    pub low_pass: Option<(LowPass, Viewing)>,
 }
 
 /// A frame ready for the socket.
@@ -64,11 +68,19 @@ pub async fn make(render: RenderHandle, job: FrameJob) -> Result<MadeFrame, Fram
         secs(frame.readback_ms),
     );
     let (codec, quality, w, h) = (job.codec, job.quality, frame.width, frame.height);
-    let rgba = frame.rgba;
     let stream = job.h264.clone();
+    let (low_pass, gaze) = (job.low_pass, job.request.gaze);
+    let rgba = frame.rgba;
     let encoded = tokio::task::spawn_blocking(move || {
         let _span = tracing::debug_span!("encode", frame = frame_no).entered();
         let start = Instant::now();
+        let rgba = match low_pass {
+            Some((p, viewing)) => {
+                let g = [f64::from(gaze[0]), f64::from(gaze[1])];
+                foveated::low_pass(&rgba, w, h, g, &viewing, &p)
+            }
+            None => rgba,
+        };
         let out = match (codec, stream) {
             (Codec::H264, Some(stream)) => stream
                 .lock()

@@ -17,6 +17,7 @@ use super::pacing::Pacer;
 use super::recorder::Recorder;
 use super::timing::FrameTimes;
 use super::ServerState;
+use crate::encode::foveated::LowPass;
 use crate::encode::h264::{H264Config, H264Stream};
 use crate::gaze::prediction::Predictor;
 use crate::protocol::{
@@ -413,6 +414,10 @@ impl Session {
             codec: hello.codec,
             quality: hello.quality,
             h264: self.h264.clone(),
+            low_pass: hello.foveated_encoding.then(|| {
+                let viewing = Viewing::new(hello.display, hello.width, hello.height);
+                (LowPass::default(), viewing)
+            }),
         })
     }
 

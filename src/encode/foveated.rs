@@ -1,0 +1,254 @@
+//! Foveated encoding: before any codec sees a frame, the periphery is low-passed to what the
+//! eye can resolve there, so its bytes go to the fovea.
+//!
+//! The eye resolves features no smaller than its minimum angle of resolution, linear in
+//! eccentricity e (seed 003, §2b): w(e) = m·e + w0 degrees. A pixel subtends p degrees, so at
+//! e the image carries no visible detail finer than w(e)/p pixels, and it may be averaged over
+//! blocks of that width: mip level L(e) = log2(w(e)/p), 0 where w(e) ≤ p. Each pixel blends
+//! the two mip levels around its L (box-filtered 2×2 pyramid, read bilinearly), so blur grows
+//! smoothly and monotonically with eccentricity. Within `guard_deg` of the gaze (the fovea
+//! plus a margin for gaze error and latency) pixels are copied unchanged, bit for bit.
+//!
+//! L is evaluated exactly on a grid every `CELL` pixels and interpolated between; the guard
+//! is widened by a cell's diagonal on the grid so no interpolated level reaches into it.
+
+use crate::viewing::Viewing;
+
+/// Grid spacing of the exact level evaluation, pixels.
+pub const CELL: u32 = 8;
+/// Coarsest pyramid level used (blocks of 2^MAX_LEVEL pixels).
+pub const MAX_LEVEL: usize = 5;
+
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct LowPass {
+    /// MAR slope m, degrees per degree of eccentricity.
+    pub mar_slope: f64,
+    /// MAR at the fovea w0, degrees.
+    pub mar_w0_deg: f64,
+    /// Untouched within this many degrees of the gaze.
+    pub guard_deg: f64,
+}
+
+impl Default for LowPass {
+    fn default() -> Self {
+        // The renderer's own acuity model (settings: mar_slope, mar_w0_deg) and the 5° within
+        // which foveal quality is judged.
+        LowPass {
+            mar_slope: 0.022,
+            mar_w0_deg: 1.0 / 48.0,
+            guard_deg: 5.0,
+        }
+    }
+}
+
+/// The pyramid level at eccentricity `e_deg` for pixels of `pixel_deg`: log2(w(e)/p), at
+/// least 0 and at most `MAX_LEVEL`; 0 within the guard. Non-decreasing in `e_deg`.
+pub fn level_at(e_deg: f64, pixel_deg: f64, p: &LowPass) -> f32 {
+    if !(e_deg > p.guard_deg) || !(pixel_deg > 0.0) {
+        return 0.0;
+    }
+    let w = p.mar_slope * e_deg + p.mar_w0_deg;
+    ((w / pixel_deg).log2().max(0.0) as f32).min(MAX_LEVEL as f32)
+}
+
+/// The level of every pixel, `gaze` normalised.
+pub fn level_map(width: u32, height: u32, gaze: [f64; 2], viewing: &Viewing, p: &LowPass) -> Vec<f32> {
+    let pixel_deg = viewing.pixel_angle_deg();
+    let gaze_px = viewing.to_pixels(gaze);
+    let (gw, gh) = (width.div_ceil(CELL) + 1, height.div_ceil(CELL) + 1);
+    // Widened guard on the grid: a pixel in the guard has all four grid corners in this one.
+    let cell_deg = f64::from(CELL) * std::f64::consts::SQRT_2 * pixel_deg * 1.5;
+    let grid_params = LowPass {
+        guard_deg: p.guard_deg + cell_deg,
+        ..*p
+    };
+    let grid: Vec<f32> = (0..gh)
+        .flat_map(|j| (0..gw).map(move |i| (i, j)))
+        .map(|(i, j)| {
+            let at = [f64::from(i * CELL), f64::from(j * CELL)];
+            level_at(viewing.eccentricity_deg(gaze_px, at), pixel_deg, &grid_params)
+        })
+        .collect();
+    let mut out = Vec::with_capacity((width * height) as usize);
+    for y in 0..height {
+        let (j, fy) = (y / CELL, (y % CELL) as f32 / CELL as f32);
+        for x in 0..width {
+            let (i, fx) = (x / CELL, (x % CELL) as f32 / CELL as f32);
+            let g = |di: u32, dj: u32| grid[((j + dj) * gw + i + di) as usize];
+            let top = g(0, 0) + (g(1, 0) - g(0, 0)) * fx;
+            let bottom = g(0, 1) + (g(1, 1) - g(0, 1)) * fx;
+            out.push(top + (bottom - top) * fy);
+        }
+    }
+    out
+}
+
+/// One pyramid level: RGB, `w`×`h`.
+struct Level {
+    rgb: Vec<[f32; 3]>,
+    w: u32,
+    h: u32,
+}
+
+/// A 2×2 box pyramid above the frame: levels 1..=MAX_LEVEL, each half the one below (rounded
+/// up; edge pixels repeat).
+fn pyramid(rgba: &[u8], width: u32, height: u32) -> Vec<Level> {
+    let base = Level {
+        rgb: rgba
+            .chunks_exact(4)
+            .map(|p| [f32::from(p[0]), f32::from(p[1]), f32::from(p[2])])
+            .collect(),
+        w: width,
+        h: height,
+    };
+    let mut levels = vec![base];
+    for _ in 0..MAX_LEVEL {
+        let Some(prev) = levels.last() else { break };
+        let (w, h) = (prev.w.div_ceil(2), prev.h.div_ceil(2));
+        let mut rgb = Vec::with_capacity((w * h) as usize);
+        for y in 0..h {
+            let (y0, y1) = (2 * y, (2 * y + 1).min(prev.h - 1));
+            for x in 0..w {
+                let (x0, x1) = (2 * x, (2 * x + 1).min(prev.w - 1));
+                let at = |xx: u32, yy: u32| prev.rgb[(yy * prev.w + xx) as usize];
+                let (a, b, c, d) = (at(x0, y0), at(x1, y0), at(x0, y1), at(x1, y1));
+                rgb.push(std::array::from_fn(|k| 0.25 * (a[k] + b[k] + c[k] + d[k])));
+            }
+        }
+        levels.push(Level { rgb, w, h });
+    }
+    levels
+}
+
+/// Bilinear read of level `k` at the position of frame pixel (x, y).
+fn sample(level: &Level, k: usize, x: u32, y: u32) -> [f32; 3] {
+    if k == 0 {
+        return level.rgb[(y * level.w + x) as usize];
+    }
+    let s = (1u32 << k) as f32;
+    let fx = ((x as f32 + 0.5) / s - 0.5).clamp(0.0, (level.w - 1) as f32);
+    let fy = ((y as f32 + 0.5) / s - 0.5).clamp(0.0, (level.h - 1) as f32);
+    let (x0, y0) = (fx as u32, fy as u32);
+    let (x1, y1) = ((x0 + 1).min(level.w - 1), (y0 + 1).min(level.h - 1));
+    let (tx, ty) = (fx - x0 as f32, fy - y0 as f32);
+    let at = |xx: u32, yy: u32| level.rgb[(yy * level.w + xx) as usize];
+    let (a, b, c, d) = (at(x0, y0), at(x1, y0), at(x0, y1), at(x1, y1));
+    std::array::from_fn(|i| {
+        let top = a[i] + (b[i] - a[i]) * tx;
+        let bottom = c[i] + (d[i] - c[i]) * tx;
+        top + (bottom - top) * ty
+    })
+}
+
+/// The frame low-passed by eccentricity around `gaze` (normalised). Pixels whose level is 0
+/// are copied exactly.
+pub fn low_pass(rgba: &[u8], width: u32, height: u32, gaze: [f64; 2], viewing: &Viewing, p: &LowPass) -> Vec<u8> {
+    if rgba.len() != (width * height * 4) as usize {
+        return rgba.to_vec();
+    }
+    let levels = level_map(width, height, gaze, viewing, p);
+    if levels.iter().all(|l| *l <= 0.0) {
+        return rgba.to_vec();
+    }
+    let pyr = pyramid(rgba, width, height);
+    let mut out = rgba.to_vec();
+    for y in 0..height {
+        for x in 0..width {
+            let i = (y * width + x) as usize;
+            let l = levels[i];
+            if l <= 0.0 {
+                continue;
+            }
+            let k = (l as usize).min(MAX_LEVEL);
+            let t = l - k as f32;
+            let a = sample(&pyr[k], k, x, y);
+            let b = if t > 0.0 && k < MAX_LEVEL { sample(&pyr[k + 1], k + 1, x, y) } else { a };
+            for c in 0..3 {
+                out[i * 4 + c] = (a[c] + (b[c] - a[c]) * t).round().clamp(0.0, 255.0) as u8;
+            }
+        }
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::viewing::Display;
+
+    fn noise(w: u32, h: u32) -> Vec<u8> {
+        let mut s = 12345u32;
+        (0..w * h * 4)
+            .map(|i| {
+                s ^= s << 13;
+                s ^= s >> 17;
+                s ^= s << 5;
+                if i % 4 == 3 { 255 } else { (s >> 24) as u8 }
+            })
+            .collect()
+    }
+
+    #[test]
+    fn the_fovea_is_bit_identical_and_blur_grows_with_eccentricity() {
+        let (w, h) = (640, 360);
+        let v = Viewing::new(Display::default(), w, h);
+        let p = LowPass::default();
+        let img = noise(w, h);
+        let gaze = [0.3, 0.5];
+        let out = low_pass(&img, w, h, gaze, &v, &p);
+        let g = v.to_pixels(gaze);
+        let (mut inside, mut changed_far) = (0, 0);
+        for y in 0..h {
+            for x in 0..w {
+                let i = ((y * w + x) * 4) as usize;
+                let e = v.eccentricity_deg(g, [f64::from(x), f64::from(y)]);
+                if e <= p.guard_deg {
+                    inside += 1;
+                    assert_eq!(out[i..i + 4], img[i..i + 4], "({x}, {y}) at {e:.2}°");
+                } else if e > 2.0 * p.guard_deg && out[i..i + 3] != img[i..i + 3] {
+                    changed_far += 1;
+                }
+            }
+        }
+        assert!(inside > 1000, "{inside} pixels in the fovea");
+        assert!(changed_far > 1000, "the periphery is filtered");
+        // Blur grows with eccentricity: the level along the row through the gaze, outward.
+        let levels = level_map(w, h, gaze, &v, &p);
+        let row = (g[1] as u32 / CELL) * CELL;
+        let from = (g[0] as u32 / CELL) * CELL;
+        let outward: Vec<f32> = (from..w).map(|x| levels[(row * w + x) as usize]).collect();
+        assert!(outward.windows(2).all(|p| p[1] >= p[0] - 1e-6), "{outward:?}");
+        assert!(outward.last().copied().unwrap_or(0.0) > 1.0);
+        // And the image's pixel-to-pixel variation falls with it, band by band.
+        let variation = |x0: u32, x1: u32| -> f64 {
+            let y = g[1] as u32;
+            (x0..x1)
+                .map(|x| {
+                    let i = ((y * w + x) * 4) as usize;
+                    (f64::from(out[i]) - f64::from(out[i + 4])).abs()
+                })
+                .sum::<f64>()
+                / f64::from(x1 - x0)
+        };
+        let bands: Vec<f64> = [(200, 300), (350, 450), (500, 600)].iter().map(|&(a, b)| variation(a, b)).collect();
+        assert!(bands[0] > bands[1] && bands[1] > bands[2], "{bands:?}");
+    }
+
+    #[test]
+    fn levels_are_monotone_and_bounded_at_the_extremes() {
+        let p = LowPass::default();
+        let mut last = 0.0;
+        for k in 0..2000 {
+            let e = f64::from(k) * 0.05;
+            let l = level_at(e, 0.02, &p);
+            assert!(l >= last && (0.0..=MAX_LEVEL as f32).contains(&l));
+            last = l;
+        }
+        assert_eq!(level_at(f64::NAN, 0.02, &p), 0.0);
+        assert_eq!(level_at(30.0, 0.0, &p), 0.0);
+        assert_eq!(level_at(1e300, 0.02, &p), MAX_LEVEL as f32);
+        // A 1x1 frame and a frame with the gaze off it do not panic.
+        let v = Viewing::new(Display::default(), 1, 1);
+        assert_eq!(low_pass(&[1, 2, 3, 255], 1, 1, [5.0, -3.0], &v, &p).len(), 4);
+    }
+}
