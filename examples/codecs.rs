@@ -51,18 +51,33 @@ fn main() -> anyhow::Result<()> {
         .and_then(|(a, b)| Some((a.parse().ok()?, b.parse().ok()?)))
         .unwrap_or((1280u32, 720u32));
     let frames: usize = args.get(2).and_then(|s| s.parse().ok()).unwrap_or(24);
-    let scene = args.get(3).cloned().unwrap_or(fovea::scene::DEFAULT_SCENE.into());
+    let scene = args
+        .get(3)
+        .cloned()
+        .unwrap_or(fovea::scene::DEFAULT_SCENE.into());
     std::fs::create_dir_all(&out)?;
     let text = std::fs::read_to_string("assets/gaze/eyelink_1000hz_1920x1080.csv")?;
-    let rec = parse(&text, &ParseOptions { screen: Some((1920, 1080)), ..Default::default() })?;
+    let rec = parse(
+        &text,
+        &ParseOptions {
+            screen: Some((1920, 1080)),
+            ..Default::default()
+        },
+    )?;
     let gaze_at = |t: f64| -> [f64; 2] {
         let i = rec.samples.partition_point(|s| s.t_ms < t);
-        rec.samples[i..].iter().find_map(fovea::gaze::sendable).unwrap_or([0.5, 0.5])
+        rec.samples[i..]
+            .iter()
+            .find_map(fovea::gaze::sendable)
+            .unwrap_or([0.5, 0.5])
     };
     let viewing = Viewing::new(Display::default(), w, h);
     let ppd = pixels_per_degree(&viewing);
     let mut renderer = Renderer::new()?;
-    eprintln!("rendering {frames} frames of {scene} at {w}x{h} on {}", renderer.adapter());
+    eprintln!(
+        "rendering {frames} frames of {scene} at {w}x{h} on {}",
+        renderer.adapter()
+    );
     let mut rendered = Vec::new();
     for k in 0..frames {
         let g = gaze_at(20_000.0 + k as f64 * 1000.0 / 30.0);
@@ -74,28 +89,49 @@ fn main() -> anyhow::Result<()> {
     for foveated in [false, true] {
         let tag = if foveated { " + foveated" } else { "" };
         for q in [50u8, 75, 85, 95] {
-            configs.push(Config { name: format!("JPEG q{q}{tag}"), h264_kbps: None, jpeg_q: q, foveated });
+            configs.push(Config {
+                name: format!("JPEG q{q}{tag}"),
+                h264_kbps: None,
+                jpeg_q: q,
+                foveated,
+            });
         }
         for kbps in [1000u32, 2000, 4000, 8000] {
-            configs.push(Config { name: format!("H.264 {kbps} kbit/s{tag}"), h264_kbps: Some(kbps), jpeg_q: 0, foveated });
+            configs.push(Config {
+                name: format!("H.264 {kbps} kbit/s{tag}"),
+                h264_kbps: Some(kbps),
+                jpeg_q: 0,
+                foveated,
+            });
         }
     }
     let p = LowPass::default();
     let mut table = String::from("| configuration | bytes/frame (median) | kbit/s at 60 fps | foveal FLIP (mean, ≤ 5°) | whole-frame FLIP (mean) | encode ms (median, incl. low-pass and colour conversion) |\n|---|---:|---:|---:|---:|---:|\n");
     for c in &configs {
         let mut t = Tally::default();
-        let mut stream = c.h264_kbps.map(|kbps| H264Stream::new(H264Config { kbps, keyframe_every: std::time::Duration::from_secs(3600) }));
+        let mut stream = c.h264_kbps.map(|kbps| {
+            H264Stream::new(H264Config {
+                kbps,
+                keyframe_every: std::time::Duration::from_secs(3600),
+            })
+        });
         let mut decoder = Decoder::new()?;
         for (k, (g, rgba)) in rendered.iter().enumerate() {
             let start = Instant::now();
-            let input = if c.foveated { low_pass(rgba, w, h, *g, &viewing, &p) } else { rgba.clone() };
+            let input = if c.foveated {
+                low_pass(rgba, w, h, *g, &viewing, &p)
+            } else {
+                rgba.clone()
+            };
             let (bytes, decoded) = match stream.as_mut() {
                 Some(s) => {
                     // Timed as frames at 60 fps: the kbit/s column's assumption.
                     let f = s.encode_at(&input, w, h, (k as f64 * 1000.0 / 60.0) as u64)?;
                     let ms = start.elapsed().as_secs_f64() * 1e3;
                     t.encode_ms.push(ms);
-                    let yuv = decoder.decode(&f.bytes)?.ok_or_else(|| anyhow::anyhow!("no picture"))?;
+                    let yuv = decoder
+                        .decode(&f.bytes)?
+                        .ok_or_else(|| anyhow::anyhow!("no picture"))?;
                     let mut back = vec![0; (w * h * 4) as usize];
                     yuv.write_rgba8(&mut back);
                     (f.bytes, back)
@@ -122,15 +158,27 @@ fn main() -> anyhow::Result<()> {
                 t.whole.push(mean(&map));
                 if k + 1 == frames - frames % 3 || k + 3 >= frames {
                     let name = c.name.replace([' ', '/', '+', '.'], "_");
-                    image::save_buffer(out.join(format!("{name}.png")), &decoded, w, h, image::ColorType::Rgba8)?;
+                    image::save_buffer(
+                        out.join(format!("{name}.png")),
+                        &decoded,
+                        w,
+                        h,
+                        image::ColorType::Rgba8,
+                    )?;
                 }
             }
         }
         let bytes = median(t.bytes.iter().map(|&b| b as f64).collect());
-        let kbps = mean(&t.bytes.iter().map(|&b| b as f64).collect::<Vec<_>>()) * 8.0 * 60.0 / 1000.0;
+        let kbps =
+            mean(&t.bytes.iter().map(|&b| b as f64).collect::<Vec<_>>()) * 8.0 * 60.0 / 1000.0;
         let row = format!(
             "| {} | {:.0} | {:.0} | {:.4} | {:.4} | {:.1} |\n",
-            c.name, bytes, kbps, mean(&t.foveal), mean(&t.whole), median(t.encode_ms.clone())
+            c.name,
+            bytes,
+            kbps,
+            mean(&t.foveal),
+            mean(&t.whole),
+            median(t.encode_ms.clone())
         );
         eprint!("{row}");
         table.push_str(&row);

@@ -25,6 +25,8 @@ fi
 
 pkgs=()
 command -v cc >/dev/null || pkgs+=(build-essential)
+# openh264 (H.264 frames) is C++, compiled from source by its crate.
+command -v c++ >/dev/null || pkgs+=(g++)
 command -v curl >/dev/null || pkgs+=(curl ca-certificates)
 command -v pkg-config >/dev/null || pkgs+=(pkg-config)
 # The Vulkan loader, and Mesa's software driver (lavapipe) when no Vulkan driver is installed:

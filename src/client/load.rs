@@ -173,7 +173,9 @@ pub async fn run(
         .map(|r| r.bytes as f64 * 8.0 / 1000.0 / r.active_s.max(1e-9))
         .collect();
     LoadReport {
-        kbit_s_total: results.iter().map(|r| r.bytes).sum::<u64>() as f64 * 8.0 / 1000.0 / seconds.max(1e-9),
+        kbit_s_total: results.iter().map(|r| r.bytes).sum::<u64>() as f64 * 8.0
+            / 1000.0
+            / seconds.max(1e-9),
         kbit_s_per_session: kbit_s,
         sessions: opts.sessions,
         seconds,

@@ -52,7 +52,13 @@ pub fn level_at(e_deg: f64, pixel_deg: f64, p: &LowPass) -> f32 {
 }
 
 /// The level of every pixel, `gaze` normalised.
-pub fn level_map(width: u32, height: u32, gaze: [f64; 2], viewing: &Viewing, p: &LowPass) -> Vec<f32> {
+pub fn level_map(
+    width: u32,
+    height: u32,
+    gaze: [f64; 2],
+    viewing: &Viewing,
+    p: &LowPass,
+) -> Vec<f32> {
     let pixel_deg = viewing.pixel_angle_deg();
     let gaze_px = viewing.to_pixels(gaze);
     let (gw, gh) = (width.div_ceil(CELL) + 1, height.div_ceil(CELL) + 1);
@@ -66,7 +72,11 @@ pub fn level_map(width: u32, height: u32, gaze: [f64; 2], viewing: &Viewing, p: 
         .flat_map(|j| (0..gw).map(move |i| (i, j)))
         .map(|(i, j)| {
             let at = [f64::from(i * CELL), f64::from(j * CELL)];
-            level_at(viewing.eccentricity_deg(gaze_px, at), pixel_deg, &grid_params)
+            level_at(
+                viewing.eccentricity_deg(gaze_px, at),
+                pixel_deg,
+                &grid_params,
+            )
         })
         .collect();
     let mut out = Vec::with_capacity((width * height) as usize);
@@ -142,7 +152,14 @@ fn sample(level: &Level, k: usize, x: u32, y: u32) -> [f32; 3] {
 
 /// The frame low-passed by eccentricity around `gaze` (normalised). Pixels whose level is 0
 /// are copied exactly.
-pub fn low_pass(rgba: &[u8], width: u32, height: u32, gaze: [f64; 2], viewing: &Viewing, p: &LowPass) -> Vec<u8> {
+pub fn low_pass(
+    rgba: &[u8],
+    width: u32,
+    height: u32,
+    gaze: [f64; 2],
+    viewing: &Viewing,
+    p: &LowPass,
+) -> Vec<u8> {
     if rgba.len() != (width * height * 4) as usize {
         return rgba.to_vec();
     }
@@ -162,7 +179,11 @@ pub fn low_pass(rgba: &[u8], width: u32, height: u32, gaze: [f64; 2], viewing: &
             let k = (l as usize).min(MAX_LEVEL);
             let t = l - k as f32;
             let a = sample(&pyr[k], k, x, y);
-            let b = if t > 0.0 && k < MAX_LEVEL { sample(&pyr[k + 1], k + 1, x, y) } else { a };
+            let b = if t > 0.0 && k < MAX_LEVEL {
+                sample(&pyr[k + 1], k + 1, x, y)
+            } else {
+                a
+            };
             for c in 0..3 {
                 out[i * 4 + c] = (a[c] + (b[c] - a[c]) * t).round().clamp(0.0, 255.0) as u8;
             }
@@ -183,7 +204,11 @@ mod tests {
                 s ^= s << 13;
                 s ^= s >> 17;
                 s ^= s << 5;
-                if i % 4 == 3 { 255 } else { (s >> 24) as u8 }
+                if i % 4 == 3 {
+                    255
+                } else {
+                    (s >> 24) as u8
+                }
             })
             .collect()
     }
@@ -217,7 +242,10 @@ mod tests {
         let row = (g[1] as u32 / CELL) * CELL;
         let from = (g[0] as u32 / CELL) * CELL;
         let outward: Vec<f32> = (from..w).map(|x| levels[(row * w + x) as usize]).collect();
-        assert!(outward.windows(2).all(|p| p[1] >= p[0] - 1e-6), "{outward:?}");
+        assert!(
+            outward.windows(2).all(|p| p[1] >= p[0] - 1e-6),
+            "{outward:?}"
+        );
         assert!(outward.last().copied().unwrap_or(0.0) > 1.0);
         // And the image's pixel-to-pixel variation falls with it, band by band.
         let variation = |x0: u32, x1: u32| -> f64 {
@@ -230,7 +258,10 @@ mod tests {
                 .sum::<f64>()
                 / f64::from(x1 - x0)
         };
-        let bands: Vec<f64> = [(200, 300), (350, 450), (500, 600)].iter().map(|&(a, b)| variation(a, b)).collect();
+        let bands: Vec<f64> = [(200, 300), (350, 450), (500, 600)]
+            .iter()
+            .map(|&(a, b)| variation(a, b))
+            .collect();
         assert!(bands[0] > bands[1] && bands[1] > bands[2], "{bands:?}");
     }
 
@@ -249,6 +280,9 @@ mod tests {
         assert_eq!(level_at(1e300, 0.02, &p), MAX_LEVEL as f32);
         // A 1x1 frame and a frame with the gaze off it do not panic.
         let v = Viewing::new(Display::default(), 1, 1);
-        assert_eq!(low_pass(&[1, 2, 3, 255], 1, 1, [5.0, -3.0], &v, &p).len(), 4);
+        assert_eq!(
+            low_pass(&[1, 2, 3, 255], 1, 1, [5.0, -3.0], &v, &p).len(),
+            4
+        );
     }
 }

@@ -139,7 +139,12 @@ impl H264Stream {
     }
 
     /// Encodes tightly packed RGBA8 pixels of even width and height, timed by the wall clock.
-    pub fn encode(&mut self, rgba: &[u8], width: u32, height: u32) -> Result<H264Frame, EncodeError> {
+    pub fn encode(
+        &mut self,
+        rgba: &[u8],
+        width: u32,
+        height: u32,
+    ) -> Result<H264Frame, EncodeError> {
         let ms = self.started.elapsed().as_millis() as u64;
         self.encode_at(rgba, width, height, ms)
     }
@@ -153,7 +158,7 @@ impl H264Stream {
         height: u32,
         ms: u64,
     ) -> Result<H264Frame, EncodeError> {
-        if width % 2 != 0 || height % 2 != 0 || width == 0 || height == 0 {
+        if !width.is_multiple_of(2) || !height.is_multiple_of(2) || width == 0 || height == 0 {
             return Err(EncodeError::OddSize(width, height));
         }
         let now = Instant::now();

@@ -10,11 +10,11 @@ use super::timing::FrameTimes;
 use crate::encode;
 use crate::encode::foveated::{self, LowPass};
 use crate::encode::h264::H264Stream;
-use crate::viewing::Viewing;
 use crate::protocol::{
     encode_frame, Codec, ErrorCode, FrameHeader, GazeUsed, ProtocolError, SolveProgress,
 };
 use crate::render::{FrameRequest, RenderHandle};
+use crate::viewing::Viewing;
 
 /// Everything needed to render a frame and write its header.
 #[derive(Debug, Clone)]
