@@ -171,15 +171,8 @@ pub struct ReplayArgs {
     /// Frame size WxH the session asks for.
     #[arg(long, value_parser = parse_size, default_value = "640x480")]
     pub size: (u32, u32),
-    /// Frame codec the sessions ask for: jpeg, png or h264.
-    #[arg(long, value_parser = super::parse::codec, default_value = "jpeg")]
-    pub codec: fovea::protocol::Codec,
-    /// H.264 bitrate, kbit/s (100 to 50000; default: the server's, 4000).
-    #[arg(long)]
-    pub bitrate_kbps: Option<u32>,
-    /// Low-pass the periphery to what the eye resolves before encoding (any codec).
-    #[arg(long)]
-    pub foveated_encoding: bool,
+    #[command(flatten)]
+    pub encoding: super::parse::EncodingArgs,
     /// Save every received frame as DIR/frames/NNNNNN.jpg.
     #[arg(long)]
     pub save_frames: bool,
@@ -222,10 +215,7 @@ pub fn replay(a: ReplayArgs) -> Result<()> {
             preset: a.preset.to_string(),
             width: a.size.0,
             height: a.size.1,
-            codec: a.codec,
-            bitrate_kbps: a.bitrate_kbps,
-            foveated_encoding: a.foveated_encoding,
-            ..Default::default()
+            ..a.encoding.hello()
         },
         speed: a.speed,
         start_ms: a.start * 1e3,

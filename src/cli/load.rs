@@ -36,15 +36,8 @@ pub struct LoadArgs {
     /// Frame size WxH every session asks for.
     #[arg(long, value_parser = super::parse::parse_size, default_value = "640x480")]
     pub size: (u32, u32),
-    /// Frame codec the sessions ask for: jpeg, png or h264.
-    #[arg(long, value_parser = super::parse::codec, default_value = "jpeg")]
-    pub codec: fovea::protocol::Codec,
-    /// H.264 bitrate, kbit/s (100 to 50000; default: the server's, 4000).
-    #[arg(long)]
-    pub bitrate_kbps: Option<u32>,
-    /// Low-pass the periphery to what the eye resolves before encoding (any codec).
-    #[arg(long)]
-    pub foveated_encoding: bool,
+    #[command(flatten)]
+    pub encoding: super::parse::EncodingArgs,
     /// Sweep budget: p95 gaze-to-frame latency, ms.
     #[arg(long, default_value_t = 500.0)]
     pub budget_ms: f64,
@@ -111,10 +104,7 @@ pub fn load(a: LoadArgs) -> Result<()> {
                 preset: a.preset.to_string(),
                 width: a.size.0,
                 height: a.size.1,
-                codec: a.codec,
-                bitrate_kbps: a.bitrate_kbps,
-                foveated_encoding: a.foveated_encoding,
-                ..Default::default()
+                ..a.encoding.hello()
             },
             seed: a.seed,
             recording: recording.clone(),

@@ -74,6 +74,32 @@ pub fn number_in(s: &str, lo: f64, hi: f64) -> Result<f64, String> {
     Ok(v)
 }
 
+/// How the sessions of `fovea replay` and `fovea load` ask for their frames to be encoded.
+#[derive(clap::Args, Clone)]
+pub struct EncodingArgs {
+    /// Frame codec the sessions ask for: jpeg, png or h264.
+    #[arg(long, value_parser = codec, default_value = "jpeg")]
+    pub codec: fovea::protocol::Codec,
+    /// H.264 bitrate, kbit/s (100 to 50000; default: the server's, 4000).
+    #[arg(long)]
+    pub bitrate_kbps: Option<u32>,
+    /// Low-pass the periphery to what the eye resolves before encoding (any codec).
+    #[arg(long)]
+    pub foveated_encoding: bool,
+}
+
+impl EncodingArgs {
+    /// A default hello carrying these choices.
+    pub fn hello(&self) -> fovea::protocol::Hello {
+        fovea::protocol::Hello {
+            codec: self.codec,
+            bitrate_kbps: self.bitrate_kbps,
+            foveated_encoding: self.foveated_encoding,
+            ..Default::default()
+        }
+    }
+}
+
 /// A frame codec by its protocol name.
 pub fn codec(s: &str) -> Result<fovea::protocol::Codec, String> {
     serde_json::from_value(serde_json::Value::String(s.to_string()))
