@@ -98,25 +98,33 @@ pub const CV_WINDOW_MS: f64 = 8.0;
 /// fewer than two.
 pub fn constant_velocity(history: &VecDeque<(f64, [f64; 2])>, h: f64) -> Option<[f64; 2]> {
     let &(t_last, last) = history.back()?;
-    let window: Vec<_> = history
+    let window = history
         .iter()
-        .filter(|(t, _)| t_last - t <= CV_WINDOW_MS + 1e-9)
-        .collect();
-    let n = window.len() as f64;
-    let mean_t = window.iter().map(|(t, _)| t).sum::<f64>() / n;
-    let den: f64 = window.iter().map(|(t, _)| (t - mean_t).powi(2)).sum();
-    if window.len() < 2 || den <= 0.0 {
-        return Some(last);
+        .filter(|(t, _)| t_last - t <= CV_WINDOW_MS + 1e-9);
+    let v = slope(window).unwrap_or([0.0; 2]);
+    Some([last[0] + v[0] * h, last[1] + v[1] * h])
+}
+
+/// The least-squares slope of position against time, per axis (units per ms); None with
+/// fewer than two distinct times.
+pub fn slope<'a>(samples: impl Iterator<Item = &'a (f64, [f64; 2])> + Clone) -> Option<[f64; 2]> {
+    let n = samples.clone().count() as f64;
+    if n < 2.0 {
+        return None;
     }
-    let v = std::array::from_fn::<f64, 2, _>(|axis| {
-        let mean_p = window.iter().map(|(_, p)| p[axis]).sum::<f64>() / n;
-        window
-            .iter()
+    let mean_t = samples.clone().map(|(t, _)| t).sum::<f64>() / n;
+    let den: f64 = samples.clone().map(|(t, _)| (t - mean_t).powi(2)).sum();
+    if den <= 0.0 {
+        return None;
+    }
+    Some(std::array::from_fn(|axis| {
+        let mean_p = samples.clone().map(|(_, p)| p[axis]).sum::<f64>() / n;
+        samples
+            .clone()
             .map(|(t, p)| (t - mean_t) * (p[axis] - mean_p))
             .sum::<f64>()
             / den
-    });
-    Some([last[0] + v[0] * h, last[1] + v[1] * h])
+    }))
 }
 
 /// Saccade amplitude (deg) whose main-sequence peak velocity is `v` (deg/s).
@@ -261,23 +269,7 @@ impl Predictor {
 
     /// Velocity in frame units per ms over the window (None with fewer than two samples).
     pub fn velocity(&self) -> Option<[f64; 2]> {
-        let n = self.history.len();
-        if n < 2 {
-            return None;
-        }
-        let mean_t = self.history.iter().map(|(t, _)| t).sum::<f64>() / n as f64;
-        let den: f64 = self.history.iter().map(|(t, _)| (t - mean_t).powi(2)).sum();
-        if den <= 0.0 {
-            return None;
-        }
-        Some(std::array::from_fn(|axis| {
-            let mean_p = self.history.iter().map(|(_, p)| p[axis]).sum::<f64>() / n as f64;
-            self.history
-                .iter()
-                .map(|(t, p)| (t - mean_t) * (p[axis] - mean_p))
-                .sum::<f64>()
-                / den
-        }))
+        slope(self.history.iter())
     }
 
     /// Angular speed in degrees per second.
