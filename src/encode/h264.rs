@@ -14,7 +14,7 @@ use openh264::encoder::{
     BitRate, Encoder, EncoderConfig, FrameRate, FrameType, Profile, RateControlMode,
     SpsPpsStrategy, UsageType, VuiConfig,
 };
-use openh264::formats::{RgbaSliceU8, YUVBuffer};
+use openh264::formats::{RgbaSliceU8, YUVBuffer, YUVSource};
 use openh264::{OpenH264API, Timestamp};
 
 use super::EncodeError;
@@ -67,6 +67,7 @@ pub struct H264Stream {
     /// The stream's clock: rate control spends bits by the time between frames.
     started: Instant,
     last_ms: u64,
+    yuv: Option<YUVBuffer>,
 }
 
 /// One encoded frame: Annex B NAL units.
@@ -96,6 +97,7 @@ impl H264Stream {
             keyframe_asked: true,
             started: Instant::now(),
             last_ms: 0,
+            yuv: None,
         }
     }
 
@@ -165,8 +167,21 @@ impl H264Stream {
         let due = self
             .last_keyframe
             .is_none_or(|t| now.duration_since(t) >= self.config.keyframe_every);
-        let yuv =
-            YUVBuffer::from_rgba8_source(RgbaSliceU8::new(rgba, (width as usize, height as usize)));
+        let (w, h) = (width as usize, height as usize);
+        if rgba.len() != w * h * 4 {
+            return Err(EncodeError::Size {
+                width,
+                height,
+                expected: w * h * 4,
+                got: rgba.len(),
+            });
+        }
+        // One YUV buffer per stream, refilled each frame (1.4 MB at 720p not reallocated).
+        let yuv = match &mut self.yuv {
+            Some(buffer) if buffer.dimensions() == (w, h) => buffer,
+            slot => slot.insert(YUVBuffer::new(w, h)),
+        };
+        yuv.read_rgba8(RgbaSliceU8::new(rgba, (w, h)));
         self.ensure_encoder(width, height)?;
         let ask = self.keyframe_asked || due;
         let Some(encoder) = self.encoder.as_mut() else {
@@ -178,8 +193,11 @@ impl H264Stream {
         // Strictly increasing, as rate control expects.
         let ms = ms.max(self.last_ms + 1);
         self.last_ms = ms;
+        let Some(yuv) = self.yuv.as_ref() else {
+            return Err(EncodeError::H264("no picture buffer".into()));
+        };
         let stream = encoder
-            .encode_at(&yuv, Timestamp::from_millis(ms))
+            .encode_at(yuv, Timestamp::from_millis(ms))
             .map_err(|e| EncodeError::H264(e.to_string()))?;
         // Only an IDR frame lets a decoder start (WebCodecs wants one after configure).
         let keyframe = stream.frame_type() == FrameType::IDR;
