@@ -104,8 +104,9 @@ fn saliency(local: vec2<i32>) -> f32 {
         }
     }
     var d_albedo = 0.0;
-    // Lab needs cube roots per tap: only worth it where the albedo actually changes.
-    if (!flat_albedo) {
+    // Lab needs cube roots per tap: only worth it where the albedo actually changes. A
+    // demodulated reconstruction restores albedo edges from the G-buffer: no samples needed.
+    if (!flat_albedo && !has_mode(MODE_DEMODULATED)) {
         var gx_lab = vec3<f32>(0.0);
         var gy_lab = vec3<f32>(0.0);
         for (var j = 0; j < 3; j++) {

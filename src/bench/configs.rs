@@ -114,6 +114,12 @@ pub fn sweep(which: &str) -> Result<Vec<BenchConfig>, String> {
     knobs.push(BenchConfig::variant("balanced nearest".into(), |s| {
         s.foveation.reconstruction = Reconstruction::Nearest
     }));
+    knobs.push(BenchConfig::variant("balanced sibson".into(), |s| {
+        s.foveation.reconstruction = Reconstruction::Sibson
+    }));
+    knobs.push(BenchConfig::variant("balanced pull-push".into(), |s| {
+        s.foveation.reconstruction = Reconstruction::PullPush
+    }));
     knobs.push(BenchConfig::variant("balanced white-noise".into(), |s| {
         s.foveation.noise = Noise::White
     }));

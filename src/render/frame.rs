@@ -10,16 +10,16 @@
 use super::graph::{GraphError, PassDecl, Recorder};
 use super::pass::gbuffer::MeshBuffers;
 use super::pass::{
-    compact, dof, gbuffer, jfa, output, photons, pyramid, resolve, sampling, screen_diffusion,
-    shade, shadow,
+    compact, dof, gbuffer, jfa, output, photons, pull_push, pyramid, resolve, sampling,
+    screen_diffusion, shade, shadow,
 };
 use super::request::MIN_XI;
 use crate::foveation::reconstruct::frame_jfa_steps;
-use crate::settings::{RenderSettings, Rung};
+use crate::settings::{Reconstruction, RenderSettings, Rung};
 
 /// Every pass the renderer has, in the order a frame meets them (shadow, photons and pyramid run
 /// once per static scene, before the frame that first needs them).
-pub const PASSES: [&PassDecl; 12] = [
+pub const PASSES: [&PassDecl; 13] = [
     &shadow::PASS,
     &photons::PASS,
     &pyramid::PASS,
@@ -30,6 +30,7 @@ pub const PASSES: [&PassDecl; 12] = [
     &shade::PASS,
     &jfa::PASS,
     &resolve::PASS,
+    &pull_push::PASS,
     &dof::PASS,
     &output::PASS,
 ];
@@ -43,7 +44,9 @@ pub struct FramePlan {
     /// Shade a compacted list rather than a masked full-frame dispatch.
     pub compaction: bool,
     pub dof: bool,
-    /// Jump sizes of the JFA steps (foveated frames).
+    /// Reconstruct with pull-push instead of jump flooding + resolve.
+    pub pull_push: bool,
+    /// Jump sizes of the JFA steps (foveated frames reconstructed from JFA).
     pub jfa_steps: Vec<u32>,
 }
 
@@ -55,7 +58,8 @@ impl FramePlan {
             foveated: fov.enabled,
             compaction: fov.compaction,
             dof: s.dof,
-            jfa_steps: if fov.enabled {
+            pull_push: fov.enabled && fov.reconstruction == Reconstruction::PullPush,
+            jfa_steps: if fov.enabled && fov.reconstruction != Reconstruction::PullPush {
                 frame_jfa_steps(width, height, fov.min_probability, MIN_XI)
             } else {
                 Vec::new()
@@ -77,8 +81,12 @@ pub fn record(f: &mut Recorder, plan: &FramePlan, mesh: &MeshBuffers) -> Result<
         } else {
             shade::record_grid(f)?;
         }
-        jfa::record(f, &plan.jfa_steps)?;
-        resolve::record(f)?;
+        if plan.pull_push {
+            pull_push::record(f)?;
+        } else {
+            jfa::record(f, &plan.jfa_steps)?;
+            resolve::record(f)?;
+        }
     } else {
         shade::record_grid(f)?;
     }

@@ -36,6 +36,10 @@ fn mode_bits(s: &crate::settings::RenderSettings) -> u32 {
         (fov.noise == Noise::White, MODE_WHITE_NOISE),
         (fov.reprojection, MODE_REPROJECTION),
         (fov.reconstruction == Reconstruction::Sibson, MODE_SIBSON),
+        (
+            fov.reconstruction == Reconstruction::PullPush,
+            MODE_DEMODULATED,
+        ),
         (s.dof, MODE_DOF),
         (!s.indirect, MODE_DIRECT_ONLY),
         (!s.shadows, MODE_NO_SHADOWS),

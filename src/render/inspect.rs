@@ -43,6 +43,11 @@ impl Renderer {
             ),
             color: quads(buf("shade.color")?),
             resolved: quads(buf("resolve.color")?),
+            albedo: bytemuck::pod_collect_to_vec(&read_texture(
+                &self.gpu,
+                t.texture("gbuffer.albedo")?,
+                4,
+            )?),
             normal_distance: quads(read_texture(
                 &self.gpu,
                 t.texture("gbuffer.normal_distance")?,

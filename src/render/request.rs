@@ -93,6 +93,8 @@ pub struct Inspection {
     pub color: Vec<[f32; 4]>,
     pub resolved: Vec<[f32; 4]>,
     pub normal_distance: Vec<[f32; 4]>,
+    /// G-buffer albedo (RGBA8: rgb, material id in alpha).
+    pub albedo: Vec<[u8; 4]>,
     /// Photons (pyramid level 0) as [x, y, z, extent, Φr, Φg, Φb, weight]; empty without any.
     pub photons: Vec<[f32; 8]>,
 }

@@ -6,7 +6,7 @@
 use std::collections::HashMap;
 
 use super::graph::{BindKey, Resources, Routes};
-use super::pass::{gbuffer, jfa};
+use super::pass::{gbuffer, jfa, pull_push};
 use super::uniforms::FrameUniform;
 use super::RenderError;
 use crate::foveation::reconstruct::jfa_steps;
@@ -116,6 +116,22 @@ impl FrameTargets {
             "jfa.steps",
             buffer("jfa.steps", steps, B::UNIFORM | B::COPY_DST),
         );
+        r.buffer(
+            "pull_push.cells",
+            buffer(
+                "pull_push.cells",
+                pull_push::cells_bytes(width, height),
+                B::STORAGE | B::COPY_SRC,
+            ),
+        );
+        r.buffer(
+            "pull_push.levels",
+            buffer(
+                "pull_push.levels",
+                pull_push::levels_bytes(width, height),
+                B::UNIFORM | B::COPY_DST,
+            ),
+        );
         r.buffer("materials.planned", planned_materials);
         FrameTargets {
             resources: r,
@@ -139,7 +155,7 @@ impl FrameTargets {
         let per_pixel: u64 = textures().iter().map(|t| texel(t.1)).sum::<u64>()
             + PER_PIXEL.iter().map(|p| p.1).sum::<u64>()
             + 4;
-        u64::from(width) * u64::from(height) * per_pixel
+        u64::from(width) * u64::from(height) * per_pixel + pull_push::cells_bytes(width, height)
     }
 
     pub fn buffer(&self, name: &'static str) -> Result<&wgpu::Buffer, RenderError> {

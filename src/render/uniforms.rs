@@ -22,6 +22,9 @@ pub const MODE_DIRECT_ONLY: u32 = 128;
 pub const MODE_NO_SHADOWS: u32 = 256;
 /// No specular lobe and no interface losses.
 pub const MODE_NO_SPECULAR: u32 = 512;
+/// Reconstruction works on lighting divided by albedo (pull-push), so albedo edges need no
+/// extra samples: saliency looks at normals only.
+pub const MODE_DEMODULATED: u32 = 1024;
 
 /// Per-pixel state written by the sampling pass.
 pub const FLAG_COVERED: u32 = 1;
@@ -41,6 +44,7 @@ pub fn constants() -> Vec<(&'static str, u32)> {
         ("MODE_DIRECT_ONLY", MODE_DIRECT_ONLY),
         ("MODE_NO_SHADOWS", MODE_NO_SHADOWS),
         ("MODE_NO_SPECULAR", MODE_NO_SPECULAR),
+        ("MODE_DEMODULATED", MODE_DEMODULATED),
         ("FLAG_COVERED", FLAG_COVERED),
         ("LOBE_TABLE", crate::optics::specular::ALBEDO_TABLE as u32),
         ("FLAG_SAMPLED", FLAG_SAMPLED),

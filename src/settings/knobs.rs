@@ -165,8 +165,8 @@ knobs! {
     /// Frames a reused colour may age.
     max_history_age: u32, "integer", Render, [0, 1000]
         => |s, v| s.render.foveation.max_history_age = v;
-    /// Reconstruction of unshaded pixels: nearest or sibson.
-    reconstruction: Reconstruction, "nearest|sibson", Render
+    /// Reconstruction of unshaded pixels: nearest, sibson or pull_push.
+    reconstruction: Reconstruction, "nearest|sibson|pull_push", Render
         => |s, v| s.render.foveation.reconstruction = v;
     /// Sibson window bound in pixels (0: from ξ).
     sibson_window: u32, "integer", Render, [0, 32]

@@ -41,6 +41,9 @@ pub enum Reconstruction {
     Nearest,
     /// Windowed approximate Sibson natural-neighbour interpolation over the JFA result.
     Sibson,
+    /// Pull-push over a pyramid of first-order moments (seed 000's hierarchical
+    /// interpolation), on lighting divided by albedo; no jump flooding.
+    PullPush,
 }
 
 /// Foveated sampling knobs (thesis eqs. 2–4). With `enabled: false` every pixel is shaded.

@@ -8,6 +8,7 @@ pub mod gbuffer;
 pub mod jfa;
 pub mod output;
 pub mod photons;
+pub mod pull_push;
 pub mod pyramid;
 pub mod resolve;
 pub mod sampling;

@@ -1,0 +1,91 @@
+//! Pictures of the foveated path for docs/images: the sampling probability, the shaded samples,
+//! the reconstruction and its error against the full render of the same frame.
+//!
+//! `cargo run --release --example foveation_maps -- [SCENE] [WxH] [PRESET] [OUT_DIR] [RECONSTRUCTION]`
+
+use anyhow::{Context, Result};
+use fovea::render::uniforms::{FLAG_COVERED, FLAG_REUSED, FLAG_SAMPLED};
+use fovea::render::{FrameRequest, Renderer};
+use fovea::settings::{Preset, RenderSettings};
+
+fn main() -> Result<()> {
+    let args: Vec<String> = std::env::args().skip(1).collect();
+    let scene = args.first().map_or("gallery", String::as_str);
+    let size = args.get(1).map_or("640x480", String::as_str);
+    let preset = args.get(2).map_or("balanced", String::as_str);
+    let out = std::path::PathBuf::from(args.get(3).map_or("docs/images", String::as_str));
+    let (w, h) = size
+        .split_once('x')
+        .and_then(|(a, b)| Some((a.parse::<u32>().ok()?, b.parse::<u32>().ok()?)))
+        .context("size is WxH")?;
+    let mut r = Renderer::new()?;
+    let mut full = FrameRequest::new(scene, w, h);
+    full.marker = false;
+    full.settings = RenderSettings::of(Preset::Full);
+    full.stream = 1;
+    let reference = r.render(&full)?;
+    let mut fov = full.clone();
+    fov.stream = 2;
+    fov.settings = RenderSettings::of(
+        Preset::from_name(preset).with_context(|| format!("no preset {preset}"))?,
+    );
+    if let Some(rec) = args.get(4) {
+        fov.settings.foveation.reconstruction =
+            serde_json::from_value(serde_json::Value::String(rec.clone()))?;
+    }
+    let label = args
+        .get(4)
+        .map_or(preset.to_string(), |r| format!("{preset}-{r}"));
+    let frame = r.render(&fov)?;
+    let ins = r.inspect(2, scene, w, h)?;
+    let n = (w * h) as usize;
+    let mut prob = vec![0u8; n * 3];
+    let mut samples = vec![0u8; n * 3];
+    let mut err = vec![0u8; n * 3];
+    for k in 0..n {
+        let p = ins.probability[k];
+        let g = (p.sqrt() * 255.0) as u8;
+        prob[3 * k..3 * k + 3].copy_from_slice(&[g, g, g]);
+        let f = ins.flags[k];
+        let c = if f & FLAG_SAMPLED != 0 {
+            [255, 255, 255]
+        } else if f & FLAG_REUSED != 0 {
+            [60, 90, 200]
+        } else if f & FLAG_COVERED != 0 {
+            [40, 40, 40]
+        } else {
+            [0, 0, 0]
+        };
+        samples[3 * k..3 * k + 3].copy_from_slice(&c);
+        let d = (0..3)
+            .map(|c| {
+                (i32::from(frame.rgba[4 * k + c]) - i32::from(reference.rgba[4 * k + c])).abs()
+            })
+            .max()
+            .unwrap_or(0);
+        let e = (d * 8).min(255) as u8;
+        err[3 * k..3 * k + 3].copy_from_slice(&[e, e, e]);
+    }
+    let save = |name: &str, px: &[u8]| -> Result<()> {
+        let path = out.join(format!("foveation-{scene}-{label}-{name}.png"));
+        image::save_buffer(&path, px, w, h, image::ColorType::Rgb8)?;
+        println!("wrote {}", path.display());
+        Ok(())
+    };
+    std::fs::create_dir_all(&out)?;
+    save("probability", &prob)?;
+    save("samples", &samples)?;
+    save("error", &err)?;
+    let rgb: Vec<u8> = frame
+        .rgba
+        .chunks(4)
+        .flat_map(|p| [p[0], p[1], p[2]])
+        .collect();
+    save("frame", &rgb)?;
+    println!(
+        "shaded {:.1}% passes {:?}",
+        frame.sampled * 100.0,
+        frame.passes_ms
+    );
+    Ok(())
+}

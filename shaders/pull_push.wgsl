@@ -1,0 +1,284 @@
+// Pull-push reconstruction (seed 000's hierarchical interpolation on the foveated samples):
+// first-order moments pulled up a pyramid of 2×2 cells, planes pushed back down, every pixel
+// without a sample filled from the bilinear blend of its four level-1 planes. Works on lighting
+// divided by albedo (floor `level.floor`) so texture edges come back from the G-buffer, not from
+// samples. CPU twin and the reasoning: foveation::pull_push.
+
+@group(0) @binding(1) var<storage, read> color: array<vec4<f32>>;
+@group(0) @binding(2) var<storage, read> flags: array<u32>;
+@group(0) @binding(3) var albedo_tex: texture_2d<f32>;
+@group(0) @binding(4) var<storage, read_write> cells: array<vec4<f32>>;
+@group(0) @binding(5) var<storage, read_write> out_resolved: array<vec4<f32>>;
+@group(0) @binding(7) var normal_distance: texture_2d<f32>;
+
+// One level's dispatch: this level and the one above (its parent), in cells.
+struct Level {
+    size: vec2<u32>,
+    offset: u32,
+    level: u32,
+    parent_size: vec2<u32>,
+    parent_offset: u32,
+    // 1 when the level above exists (push), else the top cell leans on nothing.
+    has_parent: u32,
+    ridge: f32,
+    floor: f32,
+    child_offset: u32,
+    depth_tolerance: f32,
+}
+@group(0) @binding(6) var<uniform> level: Level;
+
+// Moments (pull) or plane (push): c, w, mean, scatter s = (xx, xy, yy), t = cross terms or
+// gradient per axis, mean depth, sample range. Six vec4 per cell: (c, w), (mean, s.xy),
+// (tx, s.z), (ty, depth), (lo, 0), (hi, 0).
+struct Cell {
+    c: vec3<f32>,
+    w: f32,
+    mean: vec2<f32>,
+    s: vec3<f32>,
+    tx: vec3<f32>,
+    ty: vec3<f32>,
+    depth: f32,
+    lo: vec3<f32>,
+    hi: vec3<f32>,
+}
+
+const BIG: f32 = 3.0e38;
+
+fn empty_cell() -> Cell {
+    let z = vec3<f32>(0.0);
+    return Cell(z, 0.0, vec2<f32>(0.0), z, z, z, 0.0, vec3<f32>(BIG), vec3<f32>(-BIG));
+}
+
+const CELL_VEC4S: u32 = 6u;
+
+fn load_cell(i: u32) -> Cell {
+    let at = CELL_VEC4S * i;
+    let a = cells[at];
+    let b = cells[at + 1u];
+    let c = cells[at + 2u];
+    let d = cells[at + 3u];
+    return Cell(a.rgb, a.a, b.xy, vec3<f32>(b.z, b.w, c.a), c.rgb, d.rgb, d.a, cells[at + 4u].rgb, cells[at + 5u].rgb);
+}
+
+fn store_cell(i: u32, v: Cell) {
+    let at = CELL_VEC4S * i;
+    cells[at] = vec4<f32>(v.c, v.w);
+    cells[at + 1u] = vec4<f32>(v.mean, v.s.x, v.s.y);
+    cells[at + 2u] = vec4<f32>(v.tx, v.s.z);
+    cells[at + 3u] = vec4<f32>(v.ty, v.depth);
+    cells[at + 4u] = vec4<f32>(v.lo, 0.0);
+    cells[at + 5u] = vec4<f32>(v.hi, 0.0);
+}
+
+// A pixel as a cell: its demodulated colour when it holds a sample, else empty.
+fn pixel_cell(p: vec2<i32>) -> Cell {
+    var out = empty_cell();
+    let f = flags[index_of(p)];
+    if ((f & FLAG_COVERED) != 0u && (f & (FLAG_SAMPLED | FLAG_REUSED)) != 0u) {
+        let a = textureLoad(albedo_tex, p, 0).rgb + level.floor;
+        out.c = color[index_of(p)].rgb / a;
+        out.w = 1.0;
+        out.mean = vec2<f32>(p) + 0.5;
+        out.depth = textureLoad(normal_distance, p, 0).w;
+        out.lo = out.c;
+        out.hi = out.c;
+    }
+    return out;
+}
+
+// The exact merge of four children (some may be empty), W then clamped to 1.
+fn merge(ch: array<Cell, 4>) -> Cell {
+    var out = empty_cell();
+    for (var i = 0; i < 4; i++) {
+        out.w += ch[i].w;
+        out.lo = min(out.lo, ch[i].lo);
+        out.hi = max(out.hi, ch[i].hi);
+    }
+    if (out.w <= 0.0) {
+        return out;
+    }
+    for (var i = 0; i < 4; i++) {
+        let k = ch[i].w / out.w;
+        out.mean += k * ch[i].mean;
+        out.depth += k * ch[i].depth;
+        out.c += k * ch[i].c;
+    }
+    for (var i = 0; i < 4; i++) {
+        if (ch[i].w <= 0.0) {
+            continue;
+        }
+        let d = ch[i].mean - out.mean;
+        out.s += ch[i].s + ch[i].w * vec3<f32>(d.x * d.x, d.x * d.y, d.y * d.y);
+        let dc = ch[i].c - out.c;
+        out.tx += ch[i].tx + ch[i].w * d.x * dc;
+        out.ty += ch[i].ty + ch[i].w * d.y * dc;
+    }
+    if (out.w > 1.0) {
+        let k = 1.0 / out.w;
+        out.w = 1.0;
+        out.s *= k;
+        out.tx *= k;
+        out.ty *= k;
+    }
+    return out;
+}
+
+// Pull, level 1 from the pixels.
+@compute @workgroup_size(8, 8)
+fn pull_pixels(@builtin(global_invocation_id) id: vec3<u32>) {
+    if (any(id.xy >= level.size)) {
+        return;
+    }
+    var ch: array<Cell, 4>;
+    for (var i = 0u; i < 4u; i++) {
+        let p = vec2<i32>(2u * id.xy + vec2<u32>(i & 1u, i >> 1u));
+        ch[i] = empty_cell();
+        if (in_frame(p)) {
+            ch[i] = pixel_cell(p);
+        }
+    }
+    store_cell(level.offset + id.y * level.size.x + id.x, merge(ch));
+}
+
+// Pull, level l ≥ 2 from level l − 1 (`child_offset`, `parent_size` holds the child size).
+@compute @workgroup_size(8, 8)
+fn pull(@builtin(global_invocation_id) id: vec3<u32>) {
+    if (any(id.xy >= level.size)) {
+        return;
+    }
+    var ch: array<Cell, 4>;
+    for (var i = 0u; i < 4u; i++) {
+        let q = 2u * id.xy + vec2<u32>(i & 1u, i >> 1u);
+        ch[i] = empty_cell();
+        if (all(q < level.parent_size)) {
+            ch[i] = load_cell(level.child_offset + q.y * level.parent_size.x + q.x);
+        }
+    }
+    store_cell(level.offset + id.y * level.size.x + id.x, merge(ch));
+}
+
+// The parents' planes blended at a cell centre of level `l` (pixels for l = 0), bilinearly and
+// by how close each parent's depth is to `depth` (< 0: the blend of the parents' depths); the
+// range is the union of theirs.
+fn coarse_plane(centre: vec2<f32>, l: u32, depth: f32) -> Cell {
+    var out = empty_cell();
+    if (level.has_parent == 0u) {
+        return out;
+    }
+    let ps = f32(2u << l);
+    let u = centre / ps - 0.5;
+    let base = floor(u);
+    let f = u - base;
+    var parents: array<Cell, 4>;
+    var k: array<f32, 4>;
+    var d: array<vec2<f32>, 4>;
+    var aim_depth = 0.0;
+    for (var j = 0; j < 4; j++) {
+        let o = vec2<i32>(j & 1, j >> 1);
+        let wxy = mix(1.0 - f, f, vec2<f32>(o));
+        let q = clamp(vec2<i32>(base) + o, vec2<i32>(0), vec2<i32>(level.parent_size) - 1);
+        parents[j] = load_cell(level.parent_offset + u32(q.y) * level.parent_size.x + u32(q.x));
+        d[j] = centre - (vec2<f32>(q) + 0.5) * ps;
+        k[j] = wxy.x * wxy.y;
+        aim_depth += k[j] * parents[j].depth;
+    }
+    if (depth >= 0.0) {
+        aim_depth = depth;
+    }
+    var b: array<f32, 4>;
+    var total = 0.0;
+    for (var j = 0; j < 4; j++) {
+        let r = (parents[j].depth - aim_depth) / max(level.depth_tolerance * abs(aim_depth), 1e-12);
+        b[j] = k[j] / (1.0 + r * r);
+        total += b[j];
+    }
+    // Every parent on another surface: plain bilinear rather than dividing by nothing.
+    if (total <= 1e-6) {
+        b = k;
+        total = 1.0;
+    }
+    out.depth = aim_depth;
+    for (var j = 0; j < 4; j++) {
+        let p = parents[j];
+        let kj = b[j] / total;
+        out.c += kj * (p.c + p.tx * d[j].x + p.ty * d[j].y);
+        out.tx += kj * p.tx;
+        out.ty += kj * p.ty;
+        out.lo = min(out.lo, p.lo);
+        out.hi = max(out.hi, p.hi);
+    }
+    return out;
+}
+
+// Push, level l ≥ 1 (the top cell too): the cell's plane from its moments and the coarse plane.
+@compute @workgroup_size(8, 8)
+fn push(@builtin(global_invocation_id) id: vec3<u32>) {
+    if (any(id.xy >= level.size)) {
+        return;
+    }
+    let i = level.offset + id.y * level.size.x + id.x;
+    let side = f32(1u << level.level);
+    let centre = (vec2<f32>(id.xy) + 0.5) * side;
+    let cell = load_cell(i);
+    var aim_depth = -1.0;
+    if (cell.w > 0.0) {
+        aim_depth = cell.depth;
+    }
+    let coarse = coarse_plane(centre, level.level, aim_depth);
+    if (cell.w <= 0.0) {
+        store_cell(i, coarse);
+        return;
+    }
+    let lambda = level.ridge * cell.w * side * side;
+    let a = cell.s.x + lambda;
+    let b = cell.s.y;
+    let d = cell.s.z + lambda;
+    let det = a * d - b * b;
+    let rx = cell.tx + lambda * coarse.tx;
+    let ry = cell.ty + lambda * coarse.ty;
+    var gx = coarse.tx;
+    var gy = coarse.ty;
+    if (det > 0.0) {
+        gx = (d * rx - b * ry) / det;
+        gy = (a * ry - b * rx) / det;
+    }
+    let off = centre - cell.mean;
+    let own = cell.c + gx * off.x + gy * off.y;
+    var out = empty_cell();
+    out.c = cell.w * own + (1.0 - cell.w) * coarse.c;
+    out.w = 1.0;
+    out.mean = centre;
+    out.tx = gx;
+    out.ty = gy;
+    out.depth = cell.depth;
+    out.lo = min(cell.lo, coarse.lo);
+    out.hi = max(cell.hi, coarse.hi);
+    store_cell(i, out);
+}
+
+// Every pixel: background, its own sample, or level 1's planes times its albedo.
+@compute @workgroup_size(8, 8)
+fn push_pixels(@builtin(global_invocation_id) id: vec3<u32>) {
+    let p = vec2<i32>(id.xy);
+    if (!in_frame(p)) {
+        return;
+    }
+    let k = index_of(p);
+    let f = flags[k];
+    if ((f & FLAG_COVERED) == 0u) {
+        out_resolved[k] = vec4<f32>(frame.background, 1.0);
+        return;
+    }
+    if ((f & (FLAG_SAMPLED | FLAG_REUSED)) != 0u) {
+        out_resolved[k] = vec4<f32>(color[k].rgb, 1.0);
+        return;
+    }
+    // Bounded by the samples around the pixel: a plane cannot overshoot what they hold.
+    let coarse = coarse_plane(vec2<f32>(p) + 0.5, 0u, textureLoad(normal_distance, p, 0).w);
+    var lit = coarse.c;
+    if (all(coarse.lo <= coarse.hi)) {
+        lit = clamp(lit, coarse.lo, coarse.hi);
+    }
+    let a = textureLoad(albedo_tex, p, 0).rgb + level.floor;
+    out_resolved[k] = vec4<f32>(max(lit * a, vec3<f32>(0.0)), 1.0);
+}

@@ -1,0 +1,351 @@
+//! Pull-push reconstruction: seed 000's screen-space hierarchical interpolation applied to the
+//! foveated samples, as the CPU twin of `shaders/pull_push.wgsl` (same order of operations, f32).
+//!
+//! *Pull* builds a pyramid of 2×2 reductions up to one cell. Each cell keeps first-order moments
+//! of the samples under it: their weight W, mean position x̄, mean value c̄, the position scatter
+//! S = Σw(x − x̄)(x − x̄)ᵀ and the cross term T = Σw(x − x̄)(c − c̄)ᵀ. Four children merge exactly
+//! (parallel-axis theorem), so a cell knows the least-squares plane through its samples without
+//! visiting them again. As in Gortler et al. 1996, W is clamped to 1 after each merge (all
+//! weight-proportional moments scaled alike): a coarse level fills holes but never outvotes a
+//! finer one that has samples.
+//!
+//! *Push* goes back down and gives every cell a plane: its value at the cell centre and a
+//! gradient. The coarse estimate at a cell is the bilinear blend of its four parents' planes
+//! evaluated at its centre; the cell's own gradient solves (S + λI)g = T + λ·g_coarse, so a cell
+//! whose samples span two dimensions trusts them and one with a single sample (or a line of
+//! them) falls back on the coarse gradient; its own value is c̄ moved from x̄ to the centre along
+//! g; the two estimates mix as W·own + (1 − W)·coarse. Every step is exact for a linear
+//! function, so linear ramps are reproduced wherever the frame holds three samples not on a line,
+//! borders included. Work: 4/3 N cells up and down, O(N) in all, against JFA's N log N.
+
+/// λ in units of W·s² (s the cell's side in pixels): a cell of uniformly spread samples has
+/// S ≈ W·s²/12·I per axis, so its own scatter outweighs the coarse gradient four to one.
+pub const LAMBDA: f32 = 1.0 / 48.0;
+
+/// Relative depth difference at which a parent's plane counts half (joint-bilateral weights):
+/// planes from another surface (the floor behind a sphere) barely reach across a silhouette.
+pub const DEPTH_TOLERANCE: f32 = 0.05;
+
+/// λ at the top cell, which has no coarse gradient to lean on (zero would bias it): only enough
+/// to keep a frame whose samples lie on one line solvable.
+pub const LAMBDA_TOP: f32 = 1e-6;
+
+/// One cell's moments (pull) or, after push, its plane (`c` at the centre, `t` the gradient).
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct Cell {
+    pub w: f32,
+    /// Mean sample position, pixels (pixel centres at +0.5).
+    pub mean: [f32; 2],
+    /// Mean depth (any unit) of the samples; after push, the depth the plane belongs to.
+    pub depth: f32,
+    pub c: [f32; 3],
+    /// Position scatter: xx, xy, yy.
+    pub s: [f32; 3],
+    /// Cross moments per axis and channel; after push, the gradient per axis and channel.
+    pub t: [[f32; 3]; 2],
+    /// Smallest and largest sample value per channel under the cell (after push: around it).
+    pub range: [[f32; 3]; 2],
+}
+
+/// A range that holds nothing (its union with any range is that range).
+pub const EMPTY_RANGE: [[f32; 3]; 2] = [[f32::INFINITY; 3], [f32::NEG_INFINITY; 3]];
+
+fn union(a: &[[f32; 3]; 2], b: &[[f32; 3]; 2]) -> [[f32; 3]; 2] {
+    let mut out = *a;
+    for ch in 0..3 {
+        out[0][ch] = a[0][ch].min(b[0][ch]);
+        out[1][ch] = a[1][ch].max(b[1][ch]);
+    }
+    out
+}
+
+impl Cell {
+    /// A sample at pixel (x, y).
+    pub fn sample(x: u32, y: u32, c: [f32; 3], depth: f32) -> Cell {
+        Cell {
+            w: 1.0,
+            mean: [x as f32 + 0.5, y as f32 + 0.5],
+            depth,
+            c,
+            range: [c, c],
+            ..Cell::default()
+        }
+    }
+
+    /// Moments and plane empty, range empty.
+    pub fn empty() -> Cell {
+        Cell {
+            range: EMPTY_RANGE,
+            ..Cell::default()
+        }
+    }
+
+    /// The exact merge of up to four children, then W clamped to 1.
+    pub fn merge(children: &[Cell]) -> Cell {
+        let mut out = Cell::empty();
+        for ch in children {
+            out.w += ch.w;
+            out.range = union(&out.range, &ch.range);
+        }
+        if out.w <= 0.0 {
+            return out;
+        }
+        for ch in children {
+            let k = ch.w / out.w;
+            for a in 0..2 {
+                out.mean[a] += k * ch.mean[a];
+            }
+            out.depth += k * ch.depth;
+            for (o, c) in out.c.iter_mut().zip(ch.c) {
+                *o += k * c;
+            }
+        }
+        for ch in children.iter().filter(|c| c.w > 0.0) {
+            let d = [ch.mean[0] - out.mean[0], ch.mean[1] - out.mean[1]];
+            out.s[0] += ch.s[0] + ch.w * d[0] * d[0];
+            out.s[1] += ch.s[1] + ch.w * d[0] * d[1];
+            out.s[2] += ch.s[2] + ch.w * d[1] * d[1];
+            for a in 0..2 {
+                for ch_i in 0..3 {
+                    out.t[a][ch_i] += ch.t[a][ch_i] + ch.w * d[a] * (ch.c[ch_i] - out.c[ch_i]);
+                }
+            }
+        }
+        if out.w > 1.0 {
+            let k = 1.0 / out.w;
+            out.w = 1.0;
+            for v in &mut out.s {
+                *v *= k;
+            }
+            for row in &mut out.t {
+                for v in row {
+                    *v *= k;
+                }
+            }
+        }
+        out
+    }
+}
+
+/// Cells per side at `level` (level 0: pixels).
+pub fn level_size(width: u32, height: u32, level: u32) -> (u32, u32) {
+    let s = 1u32 << level;
+    (width.div_ceil(s), height.div_ceil(s))
+}
+
+/// Pull levels above the pixels: the top level is one cell.
+pub fn level_count(width: u32, height: u32) -> u32 {
+    let n = width.max(height).max(1);
+    n.next_power_of_two().trailing_zeros()
+}
+
+/// The coarse estimate at a level-`level` cell's centre from the completed level above: value
+/// and gradient blended from the four parents' planes evaluated there, bilinearly and by how
+/// close each parent's depth is to `depth` (`None`: the blend of the parents' depths). Each
+/// plane is exact for a linear function, so any normalised weights keep it exact. The result's
+/// range is the union of the parents' sample ranges.
+pub fn coarse_plane(
+    parent: &[Cell],
+    parent_size: (u32, u32),
+    level: u32,
+    (x, y): (u32, u32),
+    depth: Option<f32>,
+) -> Cell {
+    let s = (1u32 << level) as f32;
+    let centre = [(x as f32 + 0.5) * s, (y as f32 + 0.5) * s];
+    let ps = 2.0 * s;
+    // Parent-grid coordinates of this centre, measured from parent centres.
+    let u = [centre[0] / ps - 0.5, centre[1] / ps - 0.5];
+    let base = [u[0].floor(), u[1].floor()];
+    let f = [u[0] - base[0], u[1] - base[1]];
+    let mut parents = [(Cell::default(), [0.0f32; 2], 0.0f32); 4];
+    let mut i = 0;
+    for (dy, wy) in [(0, 1.0 - f[1]), (1, f[1])] {
+        for (dx, wx) in [(0, 1.0 - f[0]), (1, f[0])] {
+            let px = (base[0] as i64 + dx).clamp(0, i64::from(parent_size.0) - 1) as u32;
+            let py = (base[1] as i64 + dy).clamp(0, i64::from(parent_size.1) - 1) as u32;
+            let pc = [(px as f32 + 0.5) * ps, (py as f32 + 0.5) * ps];
+            parents[i] = (parent[(py * parent_size.0 + px) as usize], pc, wx * wy);
+            i += 1;
+        }
+    }
+    let target = depth.unwrap_or_else(|| parents.iter().map(|(p, _, k)| k * p.depth).sum());
+    let weight = |p: &Cell, k: f32| {
+        let r = (p.depth - target) / (DEPTH_TOLERANCE * target.abs()).max(1e-12);
+        k / (1.0 + r * r)
+    };
+    let mut total: f32 = parents.iter().map(|(p, _, k)| weight(p, *k)).sum();
+    // Every parent on another surface: plain bilinear rather than dividing by nothing.
+    let bilateral = total > 1e-6;
+    if !bilateral {
+        total = 1.0;
+    }
+    let mut out = Cell {
+        depth: target,
+        ..Cell::empty()
+    };
+    for (p, pc, k) in &parents {
+        out.range = union(&out.range, &p.range);
+        let k = if bilateral { weight(p, *k) } else { *k } / total;
+        let d = [centre[0] - pc[0], centre[1] - pc[1]];
+        for ch in 0..3 {
+            out.c[ch] += k * (p.c[ch] + p.t[0][ch] * d[0] + p.t[1][ch] * d[1]);
+            out.t[0][ch] += k * p.t[0][ch];
+            out.t[1][ch] += k * p.t[1][ch];
+        }
+    }
+    out
+}
+
+/// Completes one cell from its pulled moments and the coarse plane at its centre; `ridge` is
+/// [`LAMBDA`], or [`LAMBDA_TOP`] at the top cell. Pixels (level 0) are kept within the sample
+/// values under and around them (the union of their parents' ranges), so a plane cannot
+/// overshoot past what the samples hold (a highlight's flank extrapolated below zero); a linear
+/// function meets that bound only outside its samples' hull. Coarser cells are not bounded:
+/// a partial cell at the frame's edge has its centre outside the frame, where the plane rightly
+/// extrapolates.
+pub fn complete(cell: &Cell, coarse: &Cell, ridge: f32, level: u32, (x, y): (u32, u32)) -> Cell {
+    let range = union(&cell.range, &coarse.range);
+    let bound = |v: f32, ch: usize| {
+        if level == 0 && range[0][ch] <= range[1][ch] {
+            v.clamp(range[0][ch], range[1][ch])
+        } else {
+            v
+        }
+    };
+    if cell.w <= 0.0 {
+        let mut out = *coarse;
+        for ch in 0..3 {
+            out.c[ch] = bound(out.c[ch], ch);
+        }
+        return out;
+    }
+    let side = (1u32 << level) as f32;
+    let lambda = ridge * cell.w * side * side;
+    let (a, b, d) = (cell.s[0] + lambda, cell.s[1], cell.s[2] + lambda);
+    let det = a * d - b * b;
+    let centre = [(x as f32 + 0.5) * side, (y as f32 + 0.5) * side];
+    let off = [centre[0] - cell.mean[0], centre[1] - cell.mean[1]];
+    let mut out = Cell {
+        w: 1.0,
+        mean: centre,
+        depth: cell.depth,
+        range,
+        ..Cell::default()
+    };
+    for ch in 0..3 {
+        let rx = cell.t[0][ch] + lambda * coarse.t[0][ch];
+        let ry = cell.t[1][ch] + lambda * coarse.t[1][ch];
+        let g = if det > 0.0 {
+            [(d * rx - b * ry) / det, (a * ry - b * rx) / det]
+        } else {
+            [coarse.t[0][ch], coarse.t[1][ch]]
+        };
+        let own = cell.c[ch] + g[0] * off[0] + g[1] * off[1];
+        let v = cell.w * own + (1.0 - cell.w) * coarse.c[ch];
+        out.c[ch] = bound(v, ch);
+        out.t[0][ch] = g[0];
+        out.t[1][ch] = g[1];
+    }
+    out
+}
+
+/// Fills every pixel from the samples (`None`: no sample) and every pixel's depth. Pixels with
+/// a sample keep it.
+pub fn reconstruct(
+    width: u32,
+    height: u32,
+    samples: &[Option<[f32; 3]>],
+    depth: &[f32],
+) -> Vec<[f32; 3]> {
+    let mut levels: Vec<Vec<Cell>> = vec![(0..width * height)
+        .map(|k| match samples[k as usize] {
+            Some(c) => Cell::sample(k % width, k / width, c, depth[k as usize]),
+            None => Cell::empty(),
+        })
+        .collect()];
+    let top = level_count(width, height);
+    for l in 1..=top {
+        let (cw, chh) = level_size(width, height, l - 1);
+        let (pw, ph) = level_size(width, height, l);
+        let child = &levels[(l - 1) as usize];
+        let mut next = Vec::with_capacity((pw * ph) as usize);
+        for y in 0..ph {
+            for x in 0..pw {
+                let mut kids = Vec::with_capacity(4);
+                for (dx, dy) in [(0, 0), (1, 0), (0, 1), (1, 1)] {
+                    let (cx, cy) = (2 * x + dx, 2 * y + dy);
+                    if cx < cw && cy < chh {
+                        kids.push(child[(cy * cw + cx) as usize]);
+                    }
+                }
+                next.push(Cell::merge(&kids));
+            }
+        }
+        levels.push(next);
+    }
+    // The top cell has no parent: its coarse plane is flat zero.
+    let top_cell = levels[top as usize][0];
+    levels[top as usize][0] = complete(&top_cell, &Cell::empty(), LAMBDA_TOP, top, (0, 0));
+    for l in (0..top).rev() {
+        let (w, h) = level_size(width, height, l);
+        let parent_size = level_size(width, height, l + 1);
+        let (lower, upper) = levels.split_at_mut(l as usize + 1);
+        let parent = &upper[0];
+        let cells = &mut lower[l as usize];
+        for y in 0..h {
+            for x in 0..w {
+                let k = (y * w + x) as usize;
+                let cell = cells[k];
+                // Pixels know their depth from the G-buffer; a cell with samples, theirs.
+                let target = if l == 0 {
+                    Some(depth[k])
+                } else {
+                    (cell.w > 0.0).then_some(cell.depth)
+                };
+                let coarse = coarse_plane(parent, parent_size, l, (x, y), target);
+                cells[k] = complete(&cell, &coarse, LAMBDA, l, (x, y));
+            }
+        }
+    }
+    levels[0].iter().map(|c| c.c).collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn merging_is_exact_for_a_plane() {
+        let f = |x: f32, y: f32| [2.0 * x - 0.5 * y + 1.0, 0.0, x * 0.1];
+        let pts = [(0u32, 0u32), (1, 0), (1, 1)];
+        let cells: Vec<Cell> = pts
+            .iter()
+            .map(|&(x, y)| Cell::sample(x, y, f(x as f32 + 0.5, y as f32 + 0.5), 1.0))
+            .collect();
+        let m = Cell::merge(&cells);
+        // W clamps to 1; the plane through the three samples is still recovered exactly, both
+        // alone (top cell) and leaning on an exact coarse gradient.
+        assert_eq!(m.w, 1.0);
+        let done = complete(&m, &Cell::empty(), LAMBDA_TOP, 1, (0, 0));
+        let mut coarse = Cell::empty();
+        coarse.t = [[2.0, 0.0, 0.1], [-0.5, 0.0, 0.0]];
+        let leaning = complete(&m, &coarse, LAMBDA, 1, (0, 0));
+        for d in [done, leaning] {
+            assert!(
+                (d.t[0][0] - 2.0).abs() < 1e-3 && (d.t[1][0] + 0.5).abs() < 1e-3,
+                "{d:?}"
+            );
+            let centre = f(1.0, 1.0);
+            assert!((d.c[0] - centre[0]).abs() < 1e-4 && (d.c[2] - centre[2]).abs() < 1e-4);
+        }
+    }
+
+    #[test]
+    fn levels_reach_one_cell() {
+        assert_eq!(level_count(1, 1), 0);
+        assert_eq!(level_count(640, 480), 10);
+        assert_eq!(level_size(640, 480, 10), (1, 1));
+        assert_eq!(level_size(5, 3, 1), (3, 2));
+    }
+}

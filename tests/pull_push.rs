@@ -1,0 +1,278 @@
+//! Pull-push reconstruction (CPU twin of `shaders/pull_push.wgsl`) at its extremes: constant and
+//! linear functions, empty/full/single-sample frames, 1×1, odd and non-power-of-two sizes, and
+//! against nearest-sample and Sibson reconstruction on a smooth image.
+
+use fovea::foveation::pull_push::reconstruct;
+use fovea::foveation::reconstruct::{
+    jfa_steps, jfa_with_steps, pack, reconstruct as sibson, NO_SEED,
+};
+
+/// A deterministic scatter of samples at density `p` (a hash per pixel).
+fn mask(w: u32, h: u32, p: f32, salt: u32) -> Vec<bool> {
+    (0..w * h)
+        .map(|k| {
+            let mut x = k.wrapping_mul(0x9E37_79B9) ^ salt.wrapping_mul(0x85EB_CA6B);
+            x ^= x >> 15;
+            x = x.wrapping_mul(0x2C1B_3C6D);
+            x ^= x >> 12;
+            (x >> 8) as f32 / 16_777_216.0 < p
+        })
+        .collect()
+}
+
+fn sampled(w: u32, h: u32, m: &[bool], f: impl Fn(f32, f32) -> [f32; 3]) -> Vec<Option<[f32; 3]>> {
+    (0..w * h)
+        .map(|k| {
+            let (x, y) = ((k % w) as f32 + 0.5, (k / w) as f32 + 0.5);
+            m[k as usize].then(|| f(x, y))
+        })
+        .collect()
+}
+
+fn max_error(w: u32, out: &[[f32; 3]], f: impl Fn(f32, f32) -> [f32; 3]) -> f32 {
+    out.iter()
+        .enumerate()
+        .map(|(k, c)| {
+            let (x, y) = ((k as u32 % w) as f32 + 0.5, (k as u32 / w) as f32 + 0.5);
+            let t = f(x, y);
+            (0..3).map(|i| (c[i] - t[i]).abs()).fold(0.0, f32::max)
+        })
+        .fold(0.0, f32::max)
+}
+
+/// One surface at one depth: the joint-bilateral weights reduce to bilinear ones.
+fn flat(w: u32, h: u32) -> Vec<f32> {
+    vec![1.0; (w * h) as usize]
+}
+
+fn assert_finite(out: &[[f32; 3]]) {
+    assert!(
+        out.iter().flatten().all(|v| v.is_finite()),
+        "NaN or inf in the output"
+    );
+}
+
+#[test]
+fn constants_are_reproduced_at_every_density_and_size() {
+    let c = |_: f32, _: f32| [0.25, 0.5, 0.75];
+    for (w, h) in [(1, 1), (2, 1), (7, 5), (33, 17), (64, 64), (97, 61)] {
+        for p in [0.01, 0.1, 0.5, 1.0] {
+            let m = mask(w, h, p, w * 31 + h);
+            if !m.iter().any(|&s| s) {
+                continue;
+            }
+            let out = reconstruct(w, h, &sampled(w, h, &m, c), &flat(w, h));
+            assert_finite(&out);
+            let e = max_error(w, &out, c);
+            assert!(e < 1e-5, "{w}x{h} p={p}: constant off by {e}");
+        }
+    }
+}
+
+#[test]
+fn linear_ramps_are_reproduced_away_from_the_border() {
+    // Gradients of very different sizes per channel. Pixels nearer the border than twice the
+    // mean sample spacing may lie outside the samples' hull, where the output is bounded by the
+    // samples' range instead of extrapolated.
+    let f = |x: f32, y: f32| [0.01 * x + 0.02 * y, 0.5 - 0.003 * x, 0.2 + 0.001 * (x + y)];
+    for (w, h) in [(33, 17), (96, 64), (127, 73)] {
+        for p in [0.03f32, 0.1, 0.3] {
+            let m = mask(w, h, p, 7 + w);
+            let out = reconstruct(w, h, &sampled(w, h, &m, f), &flat(w, h));
+            assert_finite(&out);
+            let margin = (2.0 / p.sqrt()).ceil() as u32;
+            let mut worst = 0.0f32;
+            for y in margin..h.saturating_sub(margin) {
+                for x in margin..w.saturating_sub(margin) {
+                    let t = f(x as f32 + 0.5, y as f32 + 0.5);
+                    let c = out[(y * w + x) as usize];
+                    worst = (0..3).map(|i| (c[i] - t[i]).abs()).fold(worst, f32::max);
+                }
+            }
+            // f32 rounding on values up to ~2.5: a few ulps per level.
+            assert!(worst < 2e-4, "{w}x{h} p={p}: linear ramp off by {worst}");
+        }
+    }
+}
+
+#[test]
+fn a_highlight_never_overshoots_its_samples() {
+    // A narrow bright peak on a dark surface: planes fitted to its flanks point below zero.
+    let (w, h) = (64, 48);
+    let f = |x: f32, y: f32| {
+        let r2 = ((x - 30.0).powi(2) + (y - 20.0).powi(2)) / 9.0;
+        [5.0 * (-r2).exp(), 0.02, 0.0]
+    };
+    let m = mask(w, h, 0.08, 2);
+    let out = reconstruct(w, h, &sampled(w, h, &m, f), &flat(w, h));
+    let hi = (0..w * h)
+        .filter(|&k| m[k as usize])
+        .map(|k| f((k % w) as f32 + 0.5, (k / w) as f32 + 0.5)[0])
+        .fold(0.0, f32::max);
+    for c in &out {
+        assert!(
+            c[0] >= 0.0 && c[0] <= hi + 1e-5,
+            "{} outside [0, {hi}]",
+            c[0]
+        );
+    }
+}
+
+#[test]
+fn planes_do_not_reach_across_a_depth_edge() {
+    // Left half near (red), right half far (blue): an unsampled near pixel beside the edge
+    // takes the near surface's colour, not a blend.
+    let (w, h) = (64, 32);
+    let near = |x: u32| x < 32;
+    let depth: Vec<f32> = (0..w * h)
+        .map(|k| if near(k % w) { 1.0 } else { 3.0 })
+        .collect();
+    let m = mask(w, h, 0.05, 9);
+    let samples: Vec<Option<[f32; 3]>> = (0..w * h)
+        .map(|k| {
+            m[k as usize].then(|| {
+                if near(k % w) {
+                    [1.0, 0.0, 0.0]
+                } else {
+                    [0.0, 0.0, 1.0]
+                }
+            })
+        })
+        .collect();
+    let out = reconstruct(w, h, &samples, &depth);
+    let bilinear = reconstruct(w, h, &samples, &flat(w, h));
+    let leak = |img: &[[f32; 3]]| {
+        (0..w * h)
+            .filter(|&k| near(k % w) && !m[k as usize])
+            .map(|k| img[k as usize][2])
+            .fold(0.0, f32::max)
+    };
+    let (with_depth, without) = (leak(&out), leak(&bilinear));
+    eprintln!("blue leaking into the near half: {with_depth:.3} with depth, {without:.3} without");
+    // A cell whose samples mix both surfaces still carries a little of the far one.
+    assert!(with_depth < 0.2 && with_depth < 0.5 * without);
+}
+
+#[test]
+fn samples_keep_their_values_and_full_frames_pass_through() {
+    let f = |x: f32, y: f32| [(x * 0.37).sin(), (y * 0.11).cos(), x * y * 1e-3];
+    let (w, h) = (41, 29);
+    let all = vec![true; (w * h) as usize];
+    let out = reconstruct(w, h, &sampled(w, h, &all, f), &flat(w, h));
+    assert!(
+        max_error(w, &out, f) < 1e-5,
+        "every pixel sampled must pass through"
+    );
+    let m = mask(w, h, 0.2, 3);
+    let out = reconstruct(w, h, &sampled(w, h, &m, f), &flat(w, h));
+    for (k, c) in out.iter().enumerate() {
+        if m[k] {
+            let (x, y) = ((k as u32 % w) as f32 + 0.5, (k as u32 / w) as f32 + 0.5);
+            let t = f(x, y);
+            assert!(
+                (0..3).all(|i| (c[i] - t[i]).abs() < 1e-5),
+                "sample {k} moved"
+            );
+        }
+    }
+}
+
+#[test]
+fn no_samples_gives_zero_and_one_sample_fills_the_frame() {
+    let (w, h) = (19, 23);
+    let none = vec![None; (w * h) as usize];
+    let out = reconstruct(w, h, &none, &flat(w, h));
+    assert!(
+        out.iter().flatten().all(|v| *v == 0.0),
+        "an empty frame stays zero"
+    );
+    let mut one = none.clone();
+    one[(11 * w + 4) as usize] = Some([0.9, 0.1, 0.4]);
+    let out = reconstruct(w, h, &one, &flat(w, h));
+    assert_finite(&out);
+    assert!(out
+        .iter()
+        .all(|c| (c[0] - 0.9).abs() < 1e-5 && (c[2] - 0.4).abs() < 1e-5));
+    // A frame whose samples all lie on one row: still finite, exact along the row's values.
+    let row: Vec<Option<[f32; 3]>> = (0..w * h)
+        .map(|k| (k / w == 5).then(|| [(k % w) as f32 * 0.1, 0.0, 0.0]))
+        .collect();
+    let out = reconstruct(w, h, &row, &flat(w, h));
+    assert_finite(&out);
+    for x in 0..w {
+        let top = out[x as usize][0];
+        assert!((top - x as f32 * 0.1).abs() < 1e-3, "column {x}: {top}");
+    }
+}
+
+#[test]
+fn an_empty_tile_is_filled_from_its_neighbours() {
+    // A 16×16 hole in a ramp: filled by the ramp, not by zero or a constant.
+    let (w, h) = (64, 64);
+    let f = |x: f32, y: f32| [0.01 * x, 0.005 * y, 0.3];
+    let mut m = mask(w, h, 0.25, 11);
+    for y in 24..40 {
+        for x in 24..40 {
+            m[(y * w + x) as usize] = false;
+        }
+    }
+    let out = reconstruct(w, h, &sampled(w, h, &m, f), &flat(w, h));
+    assert!(max_error(w, &out, f) < 2e-4);
+}
+
+#[test]
+fn on_a_smooth_image_it_is_closer_than_nearest_and_near_sibson() {
+    let (w, h) = (96, 72);
+    let f = |x: f32, y: f32| {
+        let (u, v) = (x / 96.0, y / 72.0);
+        [
+            (6.0 * u).sin() * 0.5 + 0.5,
+            (4.0 * v + 2.0 * u).cos() * 0.5 + 0.5,
+            u * v,
+        ]
+    };
+    let m = mask(w, h, 0.06, 5);
+    let pp = reconstruct(w, h, &sampled(w, h, &m, f), &flat(w, h));
+    let seeds: Vec<u32> = (0..w * h)
+        .map(|k| {
+            if m[k as usize] {
+                pack(k % w, k / w)
+            } else {
+                NO_SEED
+            }
+        })
+        .collect();
+    let nearest = jfa_with_steps(w, h, &seeds, &jfa_steps(w, h));
+    let values: Vec<[f32; 4]> = (0..w * h)
+        .map(|k| {
+            let c = f((k % w) as f32 + 0.5, (k / w) as f32 + 0.5);
+            [c[0], c[1], c[2], 1.0]
+        })
+        .collect();
+    let covered = vec![true; (w * h) as usize];
+    let rms = |out: &dyn Fn(usize) -> [f32; 3]| {
+        let mut s = 0.0f64;
+        for k in 0..(w * h) as usize {
+            let t = f((k as u32 % w) as f32 + 0.5, (k as u32 / w) as f32 + 0.5);
+            let c = out(k);
+            s += (0..3).map(|i| f64::from(c[i] - t[i]).powi(2)).sum::<f64>();
+        }
+        (s / f64::from(w * h * 3)).sqrt()
+    };
+    let near = sibson(w, h, &nearest, &covered, &values, &values, None);
+    let sib = sibson(w, h, &nearest, &covered, &values, &values, Some(8));
+    let (e_pp, e_near, e_sib) = (
+        rms(&|k| pp[k]),
+        rms(&|k| [near[k][0], near[k][1], near[k][2]]),
+        rms(&|k| [sib[k][0], sib[k][1], sib[k][2]]),
+    );
+    eprintln!("rms: pull-push {e_pp:.5}, nearest {e_near:.5}, Sibson {e_sib:.5}");
+    assert!(
+        e_pp < 0.5 * e_near,
+        "pull-push {e_pp:.4} vs nearest {e_near:.4}"
+    );
+    assert!(
+        e_pp < 0.6 * e_sib,
+        "pull-push {e_pp:.4} vs Sibson {e_sib:.4}"
+    );
+}
