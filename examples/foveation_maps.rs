@@ -1,7 +1,7 @@
 //! Pictures of the foveated path for docs/images: the sampling probability, the shaded samples,
 //! the reconstruction and its error against the full render of the same frame.
 //!
-//! `cargo run --release --example foveation_maps -- [SCENE] [WxH] [PRESET] [OUT_DIR] [RECONSTRUCTION]`
+//! `cargo run --release --example foveation_maps -- [SCENE] [WxH] [PRESET] [OUT_DIR] [RECONSTRUCTION] [FOVEATION_PATCH_JSON]`
 
 use anyhow::{Context, Result};
 use fovea::render::uniforms::{FLAG_COVERED, FLAG_REUSED, FLAG_SAMPLED};
@@ -29,13 +29,26 @@ fn main() -> Result<()> {
     fov.settings = RenderSettings::of(
         Preset::from_name(preset).with_context(|| format!("no preset {preset}"))?,
     );
+    // Extra knobs as a JSON patch of the foveation settings, e.g. {"edges_at_mar":true}.
     if let Some(rec) = args.get(4) {
         fov.settings.foveation.reconstruction =
             serde_json::from_value(serde_json::Value::String(rec.clone()))?;
     }
-    let label = args
+    if let Some(patch) = args.get(5) {
+        let mut v = serde_json::to_value(fov.settings.foveation)?;
+        if let (Some(o), serde_json::Value::Object(p)) =
+            (v.as_object_mut(), serde_json::from_str(patch)?)
+        {
+            o.extend(p);
+        }
+        fov.settings.foveation = serde_json::from_value(v)?;
+    }
+    let mut label = args
         .get(4)
         .map_or(preset.to_string(), |r| format!("{preset}-{r}"));
+    if args.len() > 5 {
+        label.push_str("-patched");
+    }
     let frame = r.render(&fov)?;
     let ins = r.inspect(2, scene, w, h)?;
     let n = (w * h) as usize;

@@ -70,13 +70,21 @@ fn store_cell(i: u32, v: Cell) {
     cells[at + 5u] = vec4<f32>(v.hi, 0.0);
 }
 
+// What the G-buffer alone predicts of a pixel's colour: the key light's Lambert term with the
+// ambient, on the albedo, plus the floor. Reconstruction works on colour / proxy, so texture,
+// normal-map and shading-normal detail come back per pixel and only what the proxy misses
+// (shadows, specular, subsurface light, other lights) is interpolated.
+fn proxy(p: vec2<i32>) -> vec3<f32> {
+    let a = textureLoad(albedo_tex, p, 0).rgb;
+    return lambert(textureLoad(normal_distance, p, 0).xyz, a) + level.floor;
+}
+
 // A pixel as a cell: its demodulated colour when it holds a sample, else empty.
 fn pixel_cell(p: vec2<i32>) -> Cell {
     var out = empty_cell();
     let f = flags[index_of(p)];
     if ((f & FLAG_COVERED) != 0u && (f & (FLAG_SAMPLED | FLAG_REUSED)) != 0u) {
-        let a = textureLoad(albedo_tex, p, 0).rgb + level.floor;
-        out.c = color[index_of(p)].rgb / a;
+        out.c = color[index_of(p)].rgb / proxy(p);
         out.w = 1.0;
         out.mean = vec2<f32>(p) + 0.5;
         out.depth = textureLoad(normal_distance, p, 0).w;
@@ -157,57 +165,122 @@ fn pull(@builtin(global_invocation_id) id: vec3<u32>) {
     store_cell(level.offset + id.y * level.size.x + id.x, merge(ch));
 }
 
-// The parents' planes blended at a cell centre of level `l` (pixels for l = 0), bilinearly and
-// by how close each parent's depth is to `depth` (< 0: the blend of the parents' depths); the
-// range is the union of theirs.
-fn coarse_plane(centre: vec2<f32>, l: u32, depth: f32) -> Cell {
-    var out = empty_cell();
-    if (level.has_parent == 0u) {
-        return out;
-    }
-    let ps = f32(2u << l);
-    let u = centre / ps - 0.5;
+// What a parent lends its children: its plane, depth, sample range, and its centre (pixels).
+struct Plane {
+    c: vec3<f32>,
+    depth: f32,
+    tx: vec3<f32>,
+    ty: vec3<f32>,
+    lo: vec3<f32>,
+    hi: vec3<f32>,
+    centre: vec2<f32>,
+}
+
+// A completed cell of the level above, clamped into it (edge cells stand in past the border).
+fn load_plane(q: vec2<i32>, ps: f32) -> Plane {
+    let c = clamp(q, vec2<i32>(0), vec2<i32>(level.parent_size) - 1);
+    let at = CELL_VEC4S * (level.parent_offset + u32(c.y) * level.parent_size.x + u32(c.x));
+    let a = cells[at];
+    let t = cells[at + 3u];
+    return Plane(a.rgb, t.a, cells[at + 2u].rgb, t.rgb, cells[at + 4u].rgb, cells[at + 5u].rgb, (vec2<f32>(c) + 0.5) * ps);
+}
+
+// Bilinear position of a level-`l` centre among the parents: the first parent and the weights.
+fn parent_base(centre: vec2<f32>, l: u32) -> vec4<f32> {
+    let u = centre / f32(2u << l) - 0.5;
     let base = floor(u);
-    let f = u - base;
-    var parents: array<Cell, 4>;
-    var k: array<f32, 4>;
-    var d: array<vec2<f32>, 4>;
-    var aim_depth = 0.0;
-    for (var j = 0; j < 4; j++) {
-        let o = vec2<i32>(j & 1, j >> 1);
-        let wxy = mix(1.0 - f, f, vec2<f32>(o));
-        let q = clamp(vec2<i32>(base) + o, vec2<i32>(0), vec2<i32>(level.parent_size) - 1);
-        parents[j] = load_cell(level.parent_offset + u32(q.y) * level.parent_size.x + u32(q.x));
-        d[j] = centre - (vec2<f32>(q) + 0.5) * ps;
-        k[j] = wxy.x * wxy.y;
-        aim_depth += k[j] * parents[j].depth;
-    }
-    if (depth >= 0.0) {
-        aim_depth = depth;
-    }
-    var b: array<f32, 4>;
-    var total = 0.0;
-    for (var j = 0; j < 4; j++) {
-        let r = (parents[j].depth - aim_depth) / max(level.depth_tolerance * abs(aim_depth), 1e-12);
-        b[j] = k[j] / (1.0 + r * r);
-        total += b[j];
-    }
-    // Every parent on another surface: plain bilinear rather than dividing by nothing.
-    if (total <= 1e-6) {
-        b = k;
-        total = 1.0;
-    }
-    out.depth = aim_depth;
-    for (var j = 0; j < 4; j++) {
-        let p = parents[j];
-        let kj = b[j] / total;
-        out.c += kj * (p.c + p.tx * d[j].x + p.ty * d[j].y);
-        out.tx += kj * p.tx;
-        out.ty += kj * p.ty;
-        out.lo = min(out.lo, p.lo);
-        out.hi = max(out.hi, p.hi);
+    return vec4<f32>(base, u - base);
+}
+
+// Running sums of the blend: depth-weighted (b) and plain bilinear (k, the fallback when every
+// parent lies on another surface). Sums rather than arrays of parents: on a CPU adapter a local
+// array of structs spills, and this pass runs per pixel.
+struct Blend {
+    c: vec3<f32>,
+    tx: vec3<f32>,
+    ty: vec3<f32>,
+    b: f32,
+    ck: vec3<f32>,
+    txk: vec3<f32>,
+    tyk: vec3<f32>,
+    lo: vec3<f32>,
+    hi: vec3<f32>,
+}
+
+fn blend_start() -> Blend {
+    let z = vec3<f32>(0.0);
+    return Blend(z, z, z, 0.0, z, z, z, vec3<f32>(BIG), vec3<f32>(-BIG));
+}
+
+// Adds parent `p` with bilinear weight k, its plane evaluated at `centre`, weighted further by
+// how close its depth is to `aim` (relative tolerance `level.depth_tolerance`).
+fn blend_add(acc: ptr<function, Blend>, p: Plane, k: f32, centre: vec2<f32>, aim: f32) {
+    let d = centre - p.centre;
+    let v = p.c + p.tx * d.x + p.ty * d.y;
+    let r = (p.depth - aim) / max(level.depth_tolerance * abs(aim), 1e-12);
+    let b = k / (1.0 + r * r);
+    (*acc).c += b * v;
+    (*acc).tx += b * p.tx;
+    (*acc).ty += b * p.ty;
+    (*acc).b += b;
+    (*acc).ck += k * v;
+    (*acc).txk += k * p.tx;
+    (*acc).tyk += k * p.ty;
+    (*acc).lo = min((*acc).lo, p.lo);
+    (*acc).hi = max((*acc).hi, p.hi);
+}
+
+// The blend as a plane. Each parent's plane is exact for a linear function, so any normalised
+// weights keep it exact.
+fn blend_end(acc: Blend, aim: f32) -> Cell {
+    var out = empty_cell();
+    out.depth = aim;
+    out.lo = acc.lo;
+    out.hi = acc.hi;
+    if (acc.b > 1e-6) {
+        out.c = acc.c / acc.b;
+        out.tx = acc.tx / acc.b;
+        out.ty = acc.ty / acc.b;
+    } else {
+        out.c = acc.ck;
+        out.tx = acc.txk;
+        out.ty = acc.tyk;
     }
     return out;
+}
+
+fn bilinear_weight(f: vec2<f32>, j: i32) -> f32 {
+    let wxy = mix(1.0 - f, f, vec2<f32>(vec2<i32>(j & 1, j >> 1)));
+    return wxy.x * wxy.y;
+}
+
+// The coarse plane at a level-`l` cell centre from the level above, blended bilinearly and by
+// depth closeness to `depth` (< 0: the parents' own bilinear depth).
+fn coarse_plane(centre: vec2<f32>, l: u32, depth: f32) -> Cell {
+    if (level.has_parent == 0u) {
+        return empty_cell();
+    }
+    let ps = f32(2u << l);
+    let at = parent_base(centre, l);
+    let q = vec2<i32>(at.xy);
+    let p0 = load_plane(q, ps);
+    let p1 = load_plane(q + vec2<i32>(1, 0), ps);
+    let p2 = load_plane(q + vec2<i32>(0, 1), ps);
+    let p3 = load_plane(q + vec2<i32>(1, 1), ps);
+    let k0 = bilinear_weight(at.zw, 0);
+    let k1 = bilinear_weight(at.zw, 1);
+    let k2 = bilinear_weight(at.zw, 2);
+    let k3 = bilinear_weight(at.zw, 3);
+    var aim = depth;
+    if (aim < 0.0) {
+        aim = k0 * p0.depth + k1 * p1.depth + k2 * p2.depth + k3 * p3.depth;
+    }
+    var acc = blend_start();
+    blend_add(&acc, p0, k0, centre, aim);
+    blend_add(&acc, p1, k1, centre, aim);
+    blend_add(&acc, p2, k2, centre, aim);
+    blend_add(&acc, p3, k3, centre, aim);
+    return blend_end(acc, aim);
 }
 
 // Push, level l ≥ 1 (the top cell too): the cell's plane from its moments and the coarse plane.
@@ -279,6 +352,5 @@ fn push_pixels(@builtin(global_invocation_id) id: vec3<u32>) {
     if (all(coarse.lo <= coarse.hi)) {
         lit = clamp(lit, coarse.lo, coarse.hi);
     }
-    let a = textureLoad(albedo_tex, p, 0).rgb + level.floor;
-    out_resolved[k] = vec4<f32>(max(lit * a, vec3<f32>(0.0)), 1.0);
+    out_resolved[k] = vec4<f32>(max(lit * proxy(p), vec3<f32>(0.0)), 1.0);
 }

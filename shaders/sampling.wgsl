@@ -173,7 +173,12 @@ fn main(
     let e = eccentricity_deg(centre);
     var f = acuity_probability(frame.mar_slope * e + frame.mar_w0_deg);
     if (has_mode(MODE_SALIENCY) && f < 1.0) {
-        f = max(f, saliency(vec2<i32>(local.xy)));
+        var s = saliency(vec2<i32>(local.xy));
+        if (has_mode(MODE_EDGES_AT_MAR)) {
+            // One sample per pixel across an edge, one per resolvable cell along it.
+            s *= sqrt(f);
+        }
+        f = max(f, s);
     }
     if (has_mode(MODE_MOTION)) {
         let moved = length(prev - centre);

@@ -502,8 +502,13 @@ fn depth_of_field_lowers_the_sampling_map_as_the_cpu_model_says() {
 #[test]
 fn pull_push_on_the_gpu_matches_its_cpu_twin() {
     use fovea::foveation::pull_push;
-    use fovea::render::pass::pull_push::DEMODULATION_FLOOR;
     let mut r = renderer();
+    let scene = Scene::builtin("bunny").unwrap();
+    let light = scene
+        .file
+        .light
+        .color
+        .map(|c| c * scene.file.light.intensity);
     // Odd, non-power-of-two sizes, the gaze off centre, and a frame of a single pixel.
     for (stream, (w, h), gaze) in [
         (1, (97, 61), [0.3, 0.4]),
@@ -517,7 +522,18 @@ fn pull_push_on_the_gpu_matches_its_cpu_twin() {
         let img = inspect(&r, &req);
         assert_finite("pull-push", &img);
         let n = (w * h) as usize;
-        let albedo = |k: usize| img.albedo[k].map(|v| f32::from(v) / 255.0 + DEMODULATION_FLOOR);
+        let to_light = req.light_direction(&scene).to_array();
+        let albedo = |k: usize| {
+            let a = img.albedo[k].map(|v| f32::from(v) / 255.0);
+            let n = img.normal_distance[k];
+            pull_push::proxy(
+                [a[0], a[1], a[2]],
+                [n[0], n[1], n[2]],
+                to_light,
+                light,
+                scene.file.ambient,
+            )
+        };
         let has_sample = |k: usize| {
             img.flags[k] & FLAG_COVERED != 0 && img.flags[k] & (FLAG_SAMPLED | FLAG_REUSED) != 0
         };

@@ -16,7 +16,37 @@
 //! them) falls back on the coarse gradient; its own value is c̄ moved from x̄ to the centre along
 //! g; the two estimates mix as W·own + (1 − W)·coarse. Every step is exact for a linear
 //! function, so linear ramps are reproduced wherever the frame holds three samples not on a line,
-//! borders included. Work: 4/3 N cells up and down, O(N) in all, against JFA's N log N.
+//! away from the border. Work: 4/3 N cells up and down, O(N) in all, against JFA's N log N.
+//!
+//! What is reconstructed is the ratio of each sample to [`proxy`], the key light's Lambert term
+//! on the G-buffer's albedo and normal: the pixel's own proxy multiplies the result back, so
+//! textures and normal maps stay sharp without samples, and the pixel's depth weights the four
+//! parents so planes from another surface barely reach across a silhouette.
+
+/// Reconstruction works on colour / (proxy + FLOOR), the proxy being what the G-buffer alone
+/// predicts ([`proxy`]): texture, normal-map and shading-normal detail then come back per pixel,
+/// and a black texel cannot blow a sample up without bound.
+pub const DEMODULATION_FLOOR: f32 = 0.05;
+
+/// The key light's Lambert term with the ambient on the albedo, plus the floor: the divisor of
+/// the reconstructed ratio. Twin of `proxy` in `shaders/pull_push.wgsl` (and `lambert` in
+/// `shaders/common.wgsl`). `light` is the light's colour times its intensity.
+pub fn proxy(
+    albedo: [f32; 3],
+    normal: [f32; 3],
+    to_light: [f32; 3],
+    light: [f32; 3],
+    ambient: f32,
+) -> [f32; 3] {
+    let len = normal.iter().map(|v| v * v).sum::<f32>().sqrt();
+    let n = if len > 1e-20 {
+        normal.map(|v| v / len)
+    } else {
+        [0.0; 3]
+    };
+    let cos = (n[0] * to_light[0] + n[1] * to_light[1] + n[2] * to_light[2]).max(0.0);
+    std::array::from_fn(|c| albedo[c] * light[c] * (cos + ambient) + DEMODULATION_FLOOR)
+}
 
 /// λ in units of W·s² (s the cell's side in pixels): a cell of uniformly spread samples has
 /// S ≈ W·s²/12·I per axis, so its own scatter outweighs the coarse gradient four to one.

@@ -32,6 +32,7 @@ fn mode_bits(s: &crate::settings::RenderSettings) -> u32 {
     for (on, bit) in [
         (fov.enabled, MODE_FOVEATED),
         (fov.saliency, MODE_SALIENCY),
+        (fov.edges_at_mar, MODE_EDGES_AT_MAR),
         (fov.motion, MODE_MOTION),
         (fov.noise == Noise::White, MODE_WHITE_NOISE),
         (fov.reprojection, MODE_REPROJECTION),

@@ -22,9 +22,11 @@ pub const MODE_DIRECT_ONLY: u32 = 128;
 pub const MODE_NO_SHADOWS: u32 = 256;
 /// No specular lobe and no interface losses.
 pub const MODE_NO_SPECULAR: u32 = 512;
-/// Reconstruction works on lighting divided by albedo (pull-push), so albedo edges need no
-/// extra samples: saliency looks at normals only.
+/// Reconstruction works on colour divided by what the G-buffer predicts (pull-push), so albedo
+/// edges need no extra samples: saliency looks at normals only.
 pub const MODE_DEMODULATED: u32 = 1024;
+/// Saliency raises the probability to S·√p rather than S (edges sampled at the MAR along them).
+pub const MODE_EDGES_AT_MAR: u32 = 2048;
 
 /// Per-pixel state written by the sampling pass.
 pub const FLAG_COVERED: u32 = 1;
@@ -45,6 +47,7 @@ pub fn constants() -> Vec<(&'static str, u32)> {
         ("MODE_NO_SHADOWS", MODE_NO_SHADOWS),
         ("MODE_NO_SPECULAR", MODE_NO_SPECULAR),
         ("MODE_DEMODULATED", MODE_DEMODULATED),
+        ("MODE_EDGES_AT_MAR", MODE_EDGES_AT_MAR),
         ("FLAG_COVERED", FLAG_COVERED),
         ("LOBE_TABLE", crate::optics::specular::ALBEDO_TABLE as u32),
         ("FLAG_SAMPLED", FLAG_SAMPLED),

@@ -156,6 +156,8 @@ knobs! {
         => |s, v| s.render.foveation.probability = v;
     /// Raise the probability at albedo and normal edges.
     saliency: bool, "bool", Render => |s, v| s.render.foveation.saliency = v;
+    /// Edges ask for S·√p (one sample per MAR along the edge) instead of S.
+    edges_at_mar: bool, "bool", Render => |s, v| s.render.foveation.edges_at_mar = v;
     /// Raise the probability where the image moves.
     motion: bool, "bool", Render => |s, v| s.render.foveation.motion = v;
     /// Blue noise (WSE rank map) or white noise for the sampling decision.
@@ -223,7 +225,7 @@ mod tests {
         // A patch with every knob set serialises to exactly the names KNOBS lists.
         let json = serde_json::json!({
             "indirect": false, "shadows": false, "specular": false, "foveation": true, "mar_slope": 0.03, "mar_w0_deg": 0.02,
-            "min_probability": 0.2, "probability": "linear", "saliency": false, "motion": false,
+            "min_probability": 0.2, "probability": "linear", "saliency": false, "edges_at_mar": true, "motion": false,
             "noise": "white", "reprojection": false, "max_history_age": 4,
             "reconstruction": "nearest", "sibson_window": 3, "compaction": false,
             "translucency": "screen", "cut_level": 2, "cut_epsilon": 0.7, "dof": true,

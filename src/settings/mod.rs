@@ -42,7 +42,7 @@ pub enum Reconstruction {
     /// Windowed approximate Sibson natural-neighbour interpolation over the JFA result.
     Sibson,
     /// Pull-push over a pyramid of first-order moments (seed 000's hierarchical
-    /// interpolation), on lighting divided by albedo; no jump flooding.
+    /// interpolation), on colour divided by the G-buffer's Lambert prediction; no jump flooding.
     PullPush,
 }
 
@@ -60,6 +60,11 @@ pub struct Foveation {
     pub probability: ProbabilityForm,
     /// Raise the probability at albedo and normal edges (3×3 Sobel, albedo in CIE-Lab).
     pub saliency: bool,
+    /// An edge asks for S·√p instead of S: samples a pixel apart across it but only one per
+    /// resolvable cell (the MAR) along it, since an edge is one-dimensional. Off: the thesis's
+    /// eq. 3, where an edge pixel is shaded at any eccentricity.
+    #[serde(default)]
+    pub edges_at_mar: bool,
     /// Raise the probability where the image moves.
     pub motion: bool,
     pub noise: Noise,
@@ -84,6 +89,7 @@ impl Foveation {
         min_probability: 0.05,
         probability: ProbabilityForm::Density,
         saliency: true,
+        edges_at_mar: false,
         motion: true,
         noise: Noise::Blue,
         reprojection: true,

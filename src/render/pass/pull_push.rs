@@ -5,17 +5,15 @@
 
 use bytemuck::{Pod, Zeroable};
 
-use crate::foveation::pull_push::{level_count, level_size, DEPTH_TOLERANCE, LAMBDA, LAMBDA_TOP};
+use crate::foveation::pull_push::{
+    level_count, level_size, DEMODULATION_FLOOR, DEPTH_TOLERANCE, LAMBDA, LAMBDA_TOP,
+};
 use crate::render::graph::{
     dynamic_uniform, read, texture, uniform, write, DispatchSize, GraphError, PassDecl, Recorder,
 };
 
 /// Uniform slots start at multiples of the device's offset alignment (256 by default).
 pub const SLOT: u64 = 256;
-
-/// Reconstruction works on colour / (albedo + FLOOR): texture edges then come from the
-/// G-buffer, and a black texel cannot blow a sample up without bound.
-pub const DEMODULATION_FLOOR: f32 = 0.05;
 
 /// Bytes of one pyramid cell: six vec4 (moments, depth and sample range; then the plane).
 pub const CELL_BYTES: u64 = 96;
