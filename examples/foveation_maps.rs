@@ -4,9 +4,12 @@
 //! `cargo run --release --example foveation_maps -- [SCENE] [WxH] [PRESET] [OUT_DIR] [RECONSTRUCTION] [FOVEATION_PATCH_JSON]`
 
 use anyhow::{Context, Result};
+use fovea::foveation::pull_push;
 use fovea::render::uniforms::{FLAG_COVERED, FLAG_REUSED, FLAG_SAMPLED};
+use fovea::render::Inspection;
 use fovea::render::{FrameRequest, Renderer};
-use fovea::settings::{Preset, RenderSettings};
+use fovea::scene::Scene;
+use fovea::settings::{Preset, Reconstruction, RenderSettings};
 
 fn main() -> Result<()> {
     let args: Vec<String> = std::env::args().skip(1).collect();
@@ -89,6 +92,9 @@ fn main() -> Result<()> {
     save("probability", &prob)?;
     save("samples", &samples)?;
     save("error", &err)?;
+    if fov.settings.foveation.reconstruction == Reconstruction::PullPush {
+        levels(&fov, &ins, &save)?;
+    }
     let rgb: Vec<u8> = frame
         .rgba
         .chunks(4)
@@ -100,5 +106,71 @@ fn main() -> Result<()> {
         frame.sampled * 100.0,
         frame.passes_ms
     );
+    Ok(())
+}
+
+/// The pull-push pyramid of this frame (CPU twin, from the frame's own samples): levels 1, 3
+/// and 5 drawn at pixel size (each cell's plane at its centre times the pixel's proxy), coarse
+/// to fine, to show what each level fills in.
+fn levels(
+    req: &FrameRequest,
+    ins: &Inspection,
+    save: &dyn Fn(&str, &[u8]) -> Result<()>,
+) -> Result<()> {
+    let (w, h) = (req.width, req.height);
+    let scene = Scene::builtin(&req.scene)?;
+    let light = scene
+        .file
+        .light
+        .color
+        .map(|c| c * scene.file.light.intensity);
+    let to_light = req.light_direction(&scene).to_array();
+    let n = (w * h) as usize;
+    let proxy: Vec<[f32; 3]> = (0..n)
+        .map(|k| {
+            let a = ins.albedo[k].map(|v| f32::from(v) / 255.0);
+            let nd = ins.normal_distance[k];
+            pull_push::proxy(
+                [a[0], a[1], a[2]],
+                [nd[0], nd[1], nd[2]],
+                to_light,
+                light,
+                scene.file.ambient,
+            )
+        })
+        .collect();
+    let samples: Vec<Option<[f32; 3]>> = (0..n)
+        .map(|k| {
+            let f = ins.flags[k];
+            (f & FLAG_COVERED != 0 && f & (FLAG_SAMPLED | FLAG_REUSED) != 0)
+                .then(|| std::array::from_fn(|c| ins.color[k][c] / proxy[k][c]))
+        })
+        .collect();
+    let keys: Vec<pull_push::Key> = (0..n)
+        .map(|k| pull_push::Key {
+            depth: ins.normal_distance[k][3],
+            material: f32::from(ins.albedo[k][3]),
+        })
+        .collect();
+    let pyramid = pull_push::pyramid(w, h, &samples, &keys);
+    for level in [1u32, 3, 5] {
+        let Some(cells) = pyramid.get(level as usize) else {
+            continue;
+        };
+        let (lw, _) = pull_push::level_size(w, h, level);
+        let mut px = vec![0u8; n * 3];
+        for k in 0..n {
+            if ins.flags[k] & FLAG_COVERED == 0 {
+                continue;
+            }
+            let (x, y) = (k as u32 % w >> level, k as u32 / w >> level);
+            let c = cells[(y * lw + x) as usize].c;
+            for ch in 0..3 {
+                let linear = (c[ch] * proxy[k][ch]).clamp(0.0, 1.0);
+                px[3 * k + ch] = (linear.powf(1.0 / 2.2) * 255.0) as u8;
+            }
+        }
+        save(&format!("level{level}"), &px)?;
+    }
     Ok(())
 }

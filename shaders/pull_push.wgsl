@@ -24,12 +24,17 @@ struct Level {
     floor: f32,
     child_offset: u32,
     depth_tolerance: f32,
+    material_tolerance: f32,
+    pad0: u32,
+    pad1: u32,
+    pad2: u32,
 }
 @group(0) @binding(6) var<uniform> level: Level;
 
 // Moments (pull) or plane (push): c, w, mean, scatter s = (xx, xy, yy), t = cross terms or
-// gradient per axis, mean depth, sample range. Six vec4 per cell: (c, w), (mean, s.xy),
-// (tx, s.z), (ty, depth), (lo, 0), (hi, 0).
+// gradient per axis, mean depth and material id with their spreads, sample range. Seven vec4
+// per cell: (c, w), (mean, s.xy), (tx, s.z), (ty, depth), (lo, material), (hi, depth_var),
+// (material_var, 0, 0, 0).
 struct Cell {
     c: vec3<f32>,
     w: f32,
@@ -40,16 +45,19 @@ struct Cell {
     depth: f32,
     lo: vec3<f32>,
     hi: vec3<f32>,
+    material: f32,
+    depth_var: f32,
+    material_var: f32,
 }
 
 const BIG: f32 = 3.0e38;
 
 fn empty_cell() -> Cell {
     let z = vec3<f32>(0.0);
-    return Cell(z, 0.0, vec2<f32>(0.0), z, z, z, 0.0, vec3<f32>(BIG), vec3<f32>(-BIG));
+    return Cell(z, 0.0, vec2<f32>(0.0), z, z, z, 0.0, vec3<f32>(BIG), vec3<f32>(-BIG), 0.0, 0.0, 0.0);
 }
 
-const CELL_VEC4S: u32 = 6u;
+const CELL_VEC4S: u32 = 7u;
 
 fn load_cell(i: u32) -> Cell {
     let at = CELL_VEC4S * i;
@@ -57,7 +65,9 @@ fn load_cell(i: u32) -> Cell {
     let b = cells[at + 1u];
     let c = cells[at + 2u];
     let d = cells[at + 3u];
-    return Cell(a.rgb, a.a, b.xy, vec3<f32>(b.z, b.w, c.a), c.rgb, d.rgb, d.a, cells[at + 4u].rgb, cells[at + 5u].rgb);
+    let e = cells[at + 4u];
+    let f = cells[at + 5u];
+    return Cell(a.rgb, a.a, b.xy, vec3<f32>(b.z, b.w, c.a), c.rgb, d.rgb, d.a, e.rgb, f.rgb, e.a, f.a, cells[at + 6u].x);
 }
 
 fn store_cell(i: u32, v: Cell) {
@@ -66,8 +76,9 @@ fn store_cell(i: u32, v: Cell) {
     cells[at + 1u] = vec4<f32>(v.mean, v.s.x, v.s.y);
     cells[at + 2u] = vec4<f32>(v.tx, v.s.z);
     cells[at + 3u] = vec4<f32>(v.ty, v.depth);
-    cells[at + 4u] = vec4<f32>(v.lo, 0.0);
-    cells[at + 5u] = vec4<f32>(v.hi, 0.0);
+    cells[at + 4u] = vec4<f32>(v.lo, v.material);
+    cells[at + 5u] = vec4<f32>(v.hi, v.depth_var);
+    cells[at + 6u] = vec4<f32>(v.material_var, 0.0, 0.0, 0.0);
 }
 
 // What the G-buffer alone predicts of a pixel's colour: the key light's Lambert term with the
@@ -79,6 +90,11 @@ fn proxy(p: vec2<i32>) -> vec3<f32> {
     return lambert(textureLoad(normal_distance, p, 0).xyz, a) + level.floor;
 }
 
+// The pixel's material id (the G-buffer albedo's alpha, stored as id / 255).
+fn material_of(p: vec2<i32>) -> f32 {
+    return round(textureLoad(albedo_tex, p, 0).a * 255.0);
+}
+
 // A pixel as a cell: its demodulated colour when it holds a sample, else empty.
 fn pixel_cell(p: vec2<i32>) -> Cell {
     var out = empty_cell();
@@ -88,6 +104,7 @@ fn pixel_cell(p: vec2<i32>) -> Cell {
         out.w = 1.0;
         out.mean = vec2<f32>(p) + 0.5;
         out.depth = textureLoad(normal_distance, p, 0).w;
+        out.material = material_of(p);
         out.lo = out.c;
         out.hi = out.c;
     }
@@ -109,12 +126,16 @@ fn merge(ch: array<Cell, 4>) -> Cell {
         let k = ch[i].w / out.w;
         out.mean += k * ch[i].mean;
         out.depth += k * ch[i].depth;
+        out.material += k * ch[i].material;
         out.c += k * ch[i].c;
     }
     for (var i = 0; i < 4; i++) {
         if (ch[i].w <= 0.0) {
             continue;
         }
+        let k = ch[i].w / out.w;
+        out.depth_var += k * (ch[i].depth_var + (ch[i].depth - out.depth) * (ch[i].depth - out.depth));
+        out.material_var += k * (ch[i].material_var + (ch[i].material - out.material) * (ch[i].material - out.material));
         let d = ch[i].mean - out.mean;
         out.s += ch[i].s + ch[i].w * vec3<f32>(d.x * d.x, d.x * d.y, d.y * d.y);
         let dc = ch[i].c - out.c;
@@ -169,6 +190,9 @@ fn pull(@builtin(global_invocation_id) id: vec3<u32>) {
 struct Plane {
     c: vec3<f32>,
     depth: f32,
+    material: f32,
+    depth_var: f32,
+    material_var: f32,
     tx: vec3<f32>,
     ty: vec3<f32>,
     lo: vec3<f32>,
@@ -182,7 +206,9 @@ fn load_plane(q: vec2<i32>, ps: f32) -> Plane {
     let at = CELL_VEC4S * (level.parent_offset + u32(c.y) * level.parent_size.x + u32(c.x));
     let a = cells[at];
     let t = cells[at + 3u];
-    return Plane(a.rgb, t.a, cells[at + 2u].rgb, t.rgb, cells[at + 4u].rgb, cells[at + 5u].rgb, (vec2<f32>(c) + 0.5) * ps);
+    let lo = cells[at + 4u];
+    let hi = cells[at + 5u];
+    return Plane(a.rgb, t.a, lo.a, hi.a, cells[at + 6u].x, cells[at + 2u].rgb, t.rgb, lo.rgb, hi.rgb, (vec2<f32>(c) + 0.5) * ps);
 }
 
 // Bilinear position of a level-`l` centre among the parents: the first parent and the weights.
@@ -213,12 +239,16 @@ fn blend_start() -> Blend {
 }
 
 // Adds parent `p` with bilinear weight k, its plane evaluated at `centre`, weighted further by
-// how close its depth is to `aim` (relative tolerance `level.depth_tolerance`).
-fn blend_add(acc: ptr<function, Blend>, p: Plane, k: f32, centre: vec2<f32>, aim: f32) {
+// the expected squared difference of depth and material between `aim` (depth, material) and a
+// sample under the parent: the means' difference squared plus the parent's spread.
+fn blend_add(acc: ptr<function, Blend>, p: Plane, k: f32, centre: vec2<f32>, aim: vec2<f32>) {
     let d = centre - p.centre;
     let v = p.c + p.tx * d.x + p.ty * d.y;
-    let r = (p.depth - aim) / max(level.depth_tolerance * abs(aim), 1e-12);
-    let b = k / (1.0 + r * r);
+    let scale = max(level.depth_tolerance * abs(aim.x), 1e-12);
+    let r2 = ((p.depth - aim.x) * (p.depth - aim.x) + p.depth_var) / (scale * scale);
+    let m2 = ((p.material - aim.y) * (p.material - aim.y) + p.material_var)
+        / (level.material_tolerance * level.material_tolerance);
+    let b = k / ((1.0 + r2) * (1.0 + m2));
     (*acc).c += b * v;
     (*acc).tx += b * p.tx;
     (*acc).ty += b * p.ty;
@@ -232,9 +262,10 @@ fn blend_add(acc: ptr<function, Blend>, p: Plane, k: f32, centre: vec2<f32>, aim
 
 // The blend as a plane. Each parent's plane is exact for a linear function, so any normalised
 // weights keep it exact.
-fn blend_end(acc: Blend, aim: f32) -> Cell {
+fn blend_end(acc: Blend, aim: vec2<f32>) -> Cell {
     var out = empty_cell();
-    out.depth = aim;
+    out.depth = aim.x;
+    out.material = aim.y;
     out.lo = acc.lo;
     out.hi = acc.hi;
     if (acc.b > 1e-6) {
@@ -255,8 +286,8 @@ fn bilinear_weight(f: vec2<f32>, j: i32) -> f32 {
 }
 
 // The coarse plane at a level-`l` cell centre from the level above, blended bilinearly and by
-// depth closeness to `depth` (< 0: the parents' own bilinear depth).
-fn coarse_plane(centre: vec2<f32>, l: u32, depth: f32) -> Cell {
+// closeness to `key` = (depth, material) (depth < 0: the parents' own bilinear blend).
+fn coarse_plane(centre: vec2<f32>, l: u32, key: vec2<f32>) -> Cell {
     if (level.has_parent == 0u) {
         return empty_cell();
     }
@@ -271,9 +302,12 @@ fn coarse_plane(centre: vec2<f32>, l: u32, depth: f32) -> Cell {
     let k1 = bilinear_weight(at.zw, 1);
     let k2 = bilinear_weight(at.zw, 2);
     let k3 = bilinear_weight(at.zw, 3);
-    var aim = depth;
-    if (aim < 0.0) {
-        aim = k0 * p0.depth + k1 * p1.depth + k2 * p2.depth + k3 * p3.depth;
+    var aim = key;
+    if (aim.x < 0.0) {
+        aim = vec2<f32>(
+            k0 * p0.depth + k1 * p1.depth + k2 * p2.depth + k3 * p3.depth,
+            k0 * p0.material + k1 * p1.material + k2 * p2.material + k3 * p3.material,
+        );
     }
     var acc = blend_start();
     blend_add(&acc, p0, k0, centre, aim);
@@ -293,11 +327,11 @@ fn push(@builtin(global_invocation_id) id: vec3<u32>) {
     let side = f32(1u << level.level);
     let centre = (vec2<f32>(id.xy) + 0.5) * side;
     let cell = load_cell(i);
-    var aim_depth = -1.0;
+    var aim = vec2<f32>(-1.0, 0.0);
     if (cell.w > 0.0) {
-        aim_depth = cell.depth;
+        aim = vec2<f32>(cell.depth, cell.material);
     }
-    let coarse = coarse_plane(centre, level.level, aim_depth);
+    let coarse = coarse_plane(centre, level.level, aim);
     if (cell.w <= 0.0) {
         store_cell(i, coarse);
         return;
@@ -324,6 +358,9 @@ fn push(@builtin(global_invocation_id) id: vec3<u32>) {
     out.tx = gx;
     out.ty = gy;
     out.depth = cell.depth;
+    out.material = cell.material;
+    out.depth_var = cell.depth_var;
+    out.material_var = cell.material_var;
     out.lo = min(cell.lo, coarse.lo);
     out.hi = max(cell.hi, coarse.hi);
     store_cell(i, out);
@@ -347,7 +384,8 @@ fn push_pixels(@builtin(global_invocation_id) id: vec3<u32>) {
         return;
     }
     // Bounded by the samples around the pixel: a plane cannot overshoot what they hold.
-    let coarse = coarse_plane(vec2<f32>(p) + 0.5, 0u, textureLoad(normal_distance, p, 0).w);
+    let key = vec2<f32>(textureLoad(normal_distance, p, 0).w, material_of(p));
+    let coarse = coarse_plane(vec2<f32>(p) + 0.5, 0u, key);
     var lit = coarse.c;
     if (all(coarse.lo <= coarse.hi)) {
         lit = clamp(lit, coarse.lo, coarse.hi);

@@ -88,6 +88,7 @@ fn saliency(local: vec2<i32>) -> f32 {
     var gy_n = vec3<f32>(0.0);
     var first = vec4<f32>(0.0);
     var flat_albedo = true;
+    var one_material = true;
     for (var j = 0; j < 3; j++) {
         for (var i = 0; i < 3; i++) {
             let t = u32((local.y + j) * 10 + local.x + i);
@@ -100,13 +101,18 @@ fn saliency(local: vec2<i32>) -> f32 {
                 first = a;
             } else if (any(a != first)) {
                 flat_albedo = false;
+                one_material = one_material && a.a == first.a;
             }
         }
     }
     var d_albedo = 0.0;
-    // Lab needs cube roots per tap: only worth it where the albedo actually changes. A
-    // demodulated reconstruction restores albedo edges from the G-buffer: no samples needed.
-    if (!flat_albedo && !has_mode(MODE_DEMODULATED)) {
+    // A demodulated reconstruction restores albedo edges within a material from the G-buffer,
+    // so only a change of material (alpha: material id), where the ratio to the G-buffer's
+    // prediction jumps (an emitter beside a wall), is an edge. Otherwise Lab needs cube roots
+    // per tap: only worth it where the albedo actually changes.
+    if (has_mode(MODE_DEMODULATED)) {
+        d_albedo = select(1.0, 0.0, one_material);
+    } else if (!flat_albedo) {
         var gx_lab = vec3<f32>(0.0);
         var gy_lab = vec3<f32>(0.0);
         for (var j = 0; j < 3; j++) {

@@ -543,8 +543,13 @@ fn pull_push_on_the_gpu_matches_its_cpu_twin() {
                 has_sample(k).then(|| std::array::from_fn(|c| img.color[k][c] / a[c]))
             })
             .collect();
-        let depth: Vec<f32> = img.normal_distance.iter().map(|v| v[3]).collect();
-        let cpu = pull_push::reconstruct(w, h, &samples, &depth);
+        let keys: Vec<pull_push::Key> = (0..n)
+            .map(|k| pull_push::Key {
+                depth: img.normal_distance[k][3],
+                material: f32::from(img.albedo[k][3]),
+            })
+            .collect();
+        let cpu = pull_push::reconstruct(w, h, &samples, &keys);
         let mut worst = 0.0f32;
         for k in 0..n {
             if img.flags[k] & FLAG_COVERED == 0 {

@@ -2,7 +2,7 @@
 //! linear functions, empty/full/single-sample frames, 1×1, odd and non-power-of-two sizes, and
 //! against nearest-sample and Sibson reconstruction on a smooth image.
 
-use fovea::foveation::pull_push::reconstruct;
+use fovea::foveation::pull_push::{reconstruct, Key};
 use fovea::foveation::reconstruct::{
     jfa_steps, jfa_with_steps, pack, reconstruct as sibson, NO_SEED,
 };
@@ -41,8 +41,14 @@ fn max_error(w: u32, out: &[[f32; 3]], f: impl Fn(f32, f32) -> [f32; 3]) -> f32 
 }
 
 /// One surface at one depth: the joint-bilateral weights reduce to bilinear ones.
-fn flat(w: u32, h: u32) -> Vec<f32> {
-    vec![1.0; (w * h) as usize]
+fn flat(w: u32, h: u32) -> Vec<Key> {
+    vec![
+        Key {
+            depth: 1.0,
+            material: 0.0
+        };
+        (w * h) as usize
+    ]
 }
 
 fn assert_finite(out: &[[f32; 3]]) {
@@ -124,8 +130,11 @@ fn planes_do_not_reach_across_a_depth_edge() {
     // takes the near surface's colour, not a blend.
     let (w, h) = (64, 32);
     let near = |x: u32| x < 32;
-    let depth: Vec<f32> = (0..w * h)
-        .map(|k| if near(k % w) { 1.0 } else { 3.0 })
+    let depth: Vec<Key> = (0..w * h)
+        .map(|k| Key {
+            depth: if near(k % w) { 1.0 } else { 3.0 },
+            material: 0.0,
+        })
         .collect();
     let m = mask(w, h, 0.05, 9);
     let samples: Vec<Option<[f32; 3]>> = (0..w * h)
@@ -275,4 +284,34 @@ fn on_a_smooth_image_it_is_closer_than_nearest_and_near_sibson() {
         e_pp < 0.6 * e_sib,
         "pull-push {e_pp:.4} vs Sibson {e_sib:.4}"
     );
+}
+
+#[test]
+fn planes_do_not_reach_across_a_material_boundary() {
+    // One flat surface, two materials whose ratios differ 40-fold (a lamp in a ceiling): the
+    // ceiling beside the lamp keeps the ceiling's ratio.
+    let (w, h) = (64, 32);
+    let lamp = |x: u32| (24..40).contains(&x);
+    let keys: Vec<Key> = (0..w * h)
+        .map(|k| Key {
+            depth: 1.0,
+            material: if lamp(k % w) { 2.0 } else { 1.0 },
+        })
+        .collect();
+    let m = mask(w, h, 0.05, 4);
+    let samples: Vec<Option<[f32; 3]>> = (0..w * h)
+        .map(|k| m[k as usize].then(|| if lamp(k % w) { [20.0; 3] } else { [0.5; 3] }))
+        .collect();
+    let worst = |keys: &[Key]| {
+        let out = reconstruct(w, h, &samples, keys);
+        let errors: Vec<f32> = (0..w * h)
+            .filter(|&k| !lamp(k % w) && !m[k as usize])
+            .map(|k| (out[k as usize][0] - 0.5).abs())
+            .collect();
+        let mean = errors.iter().sum::<f32>() / errors.len() as f32;
+        (mean, errors.into_iter().fold(0.0, f32::max))
+    };
+    let (with, without) = (worst(&keys), worst(&flat(w, h)));
+    eprintln!("ceiling error (mean, max): {with:?} with materials, {without:?} without");
+    assert!(with.0 < 0.5 * without.0 && with.1 < 0.5 * without.1);
 }

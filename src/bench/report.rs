@@ -66,9 +66,22 @@ pub struct BenchRecord {
     pub speedup_vs_full: Option<f64>,
     /// The same ratio for the shading pass alone.
     pub shade_speedup_vs_full: Option<f64>,
+    /// GPU milliseconds of the passes foveation adds ([`FOVEATION_PASSES`]).
+    #[serde(default)]
+    pub overhead_ms: f64,
+    /// The ratio to `full` if a frame cost in proportion to the samples it shades: 1 / shaded.
+    #[serde(default)]
+    pub ideal_vs_full: Option<f64>,
+    /// Medians against the `full` render of the same frame (when `full` is in the sweep): what
+    /// foveation costs in quality, apart from the shading model's own error.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub vs_full: Option<Errors>,
     /// On the Pareto front of (frame time, FLIP) within its group.
     pub pareto: bool,
 }
+
+/// The passes a foveated frame adds to a full one: choosing, listing and reconstructing samples.
+pub const FOVEATION_PASSES: [&str; 5] = ["sampling", "compact", "jfa", "resolve", "pull_push"];
 
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Machine {
@@ -170,6 +183,12 @@ impl BenchReport {
             let front = pareto_front(&points);
             for (slot, &i) in members.iter().enumerate() {
                 let r = &mut self.records[i];
+                r.overhead_ms = FOVEATION_PASSES
+                    .iter()
+                    .filter_map(|p| r.passes_ms.get(*p))
+                    .sum();
+                r.ideal_vs_full =
+                    (r.settings.foveation.enabled && r.sampled > 0.0).then(|| 1.0 / r.sampled);
                 if let Some(f) = &full {
                     r.speedup_vs_full = Some(f.frame_ms.median / r.frame_ms.median);
                     if let (Some(a), Some(b)) = (f.passes_ms.get("shade"), r.passes_ms.get("shade"))
@@ -233,6 +252,7 @@ impl BenchReport {
                 r.bytes / 1024.0,
             ));
         }
+        s.push_str(&self.distance_to_ideal());
         if let Some(file) = &self.ground_truth {
             s.push_str(&format!(
                 "\n## Against physical ground truth `{file}`\n\nMedians over the measured frames; the model's own reference first.\n\n| group | configuration | PSNR dB | SSIM | FLIP | FLIP pooled | FLIP 5° |\n|---|---|---:|---:|---:|---:|---:|\n"
@@ -265,6 +285,48 @@ impl BenchReport {
                     }
                 }
             }
+        }
+        s
+    }
+}
+
+impl BenchReport {
+    /// Per foveated configuration: what foveation adds, the achieved ratio to `full` beside the
+    /// ideal one, and the quality lost against `full` itself.
+    fn distance_to_ideal(&self) -> String {
+        let rows: Vec<&BenchRecord> = self
+            .records
+            .iter()
+            .filter(|r| r.ideal_vs_full.is_some() && r.speedup_vs_full.is_some())
+            .collect();
+        if rows.is_empty() {
+            return String::new();
+        }
+        let mut s = String::from(
+            "\n## Foveation against full: cost and distance to the ideal\n\n*Overhead* is the GPU time of the passes foveation adds (sampling, compaction, reconstruction), also as a share of `full`'s frame; *ideal* is the ratio if a frame cost in proportion to the pixels it shades (1 / shaded); errors are against the `full` render of the same frame.\n\n| group | configuration | shaded | overhead ms | overhead / full | achieved | ideal | achieved / ideal | PSNR vs full | FLIP vs full | FLIP 5° vs full |\n|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n",
+        );
+        for r in rows {
+            let (achieved, ideal) = (
+                r.speedup_vs_full.unwrap_or(f64::NAN),
+                r.ideal_vs_full.unwrap_or(f64::NAN),
+            );
+            let full_ms = r.frame_ms.median * achieved;
+            let (psnr, flip, flip5) =
+                r.vs_full
+                    .as_ref()
+                    .map_or(("–".into(), "–".into(), "–".into()), |e| {
+                        (
+                            format!("{:.2}", e.psnr),
+                            format!("{:.4}", e.flip),
+                            format!("{:.4}", e.flip_fovea),
+                        )
+                    });
+            s.push_str(&format!(
+                "| {} {}×{} ({:.2}, {:.2}) | {} | {:.1}% | {:.1} | {:.0}% | {:.2}× | {:.1}× | {:.0}% | {psnr} | {flip} | {flip5} |\n",
+                r.scene, r.width, r.height, r.gaze[0], r.gaze[1], r.config,
+                100.0 * r.sampled, r.overhead_ms, 100.0 * r.overhead_ms / full_ms,
+                achieved, ideal, 100.0 * achieved / ideal,
+            ));
         }
         s
     }

@@ -44,6 +44,8 @@ struct Samples {
     errors: Vec<Errors>,
     /// Against the ground truth image, when there is one.
     truth: Vec<Errors>,
+    /// Against `full`'s render of the same frame (foveated configurations).
+    vs_full: Vec<Errors>,
 }
 
 fn gaze_at(start: [f32; 2], moving: bool, frame: u32) -> [f32; 2] {
@@ -120,6 +122,8 @@ pub fn run(
             if let (Some(t), true) = (truth, measured) {
                 reference_vs_truth.push(compare(t, &reference_frame.rgba));
             }
+            // Each configuration's frame, to compare with `full`'s once all are rendered.
+            let mut frames: Vec<Option<Vec<u8>>> = vec![None; opts.configs.len()];
             for (ci, config) in opts.configs.iter().enumerate() {
                 if stop.load(Ordering::Relaxed) {
                     // Keep what this group measured so far; skip the rest.
@@ -156,6 +160,17 @@ pub fn run(
                     gaze_px,
                     &weights,
                 ));
+                frames[ci] = Some(frame.rgba);
+            }
+            let full = opts.configs.iter().position(|c| c.name == "full");
+            if let Some(Some(full_rgba)) = full.map(|i| frames[i].clone()) {
+                for (ci, config) in opts.configs.iter().enumerate() {
+                    if let (Some(rgba), true) = (&frames[ci], config.settings.foveation.enabled) {
+                        samples[ci].vs_full.push(quality::measure(
+                            &full_rgba, rgba, *w, *h, &viewing, gaze_px, &weights,
+                        ));
+                    }
+                }
             }
         }
         for (config, s) in opts.configs.iter().zip(samples) {
@@ -186,6 +201,9 @@ pub fn run(
                 ground_truth: (!s.truth.is_empty()).then(|| median_errors(&s.truth)),
                 speedup_vs_full: None,
                 shade_speedup_vs_full: None,
+                overhead_ms: 0.0,
+                ideal_vs_full: None,
+                vs_full: (!s.vs_full.is_empty()).then(|| median_errors(&s.vs_full)),
                 pareto: false,
             });
         }

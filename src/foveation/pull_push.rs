@@ -20,8 +20,9 @@
 //!
 //! What is reconstructed is the ratio of each sample to [`proxy`], the key light's Lambert term
 //! on the G-buffer's albedo and normal: the pixel's own proxy multiplies the result back, so
-//! textures and normal maps stay sharp without samples, and the pixel's depth weights the four
-//! parents so planes from another surface barely reach across a silhouette.
+//! textures and normal maps stay sharp without samples, and the pixel's depth and material weight
+//! the four parents so planes from another surface or material (whose ratio to the proxy jumps:
+//! an emitter beside a wall) barely reach across a silhouette or a material boundary.
 
 /// Reconstruction works on colour / (proxy + FLOOR), the proxy being what the G-buffer alone
 /// predicts ([`proxy`]): texture, normal-map and shading-normal detail then come back per pixel,
@@ -56,6 +57,18 @@ pub const LAMBDA: f32 = 1.0 / 48.0;
 /// planes from another surface (the floor behind a sphere) barely reach across a silhouette.
 pub const DEPTH_TOLERANCE: f32 = 0.05;
 
+/// Material-id difference at which a parent's plane counts half. Ids are categories, yet a cell
+/// mixing materials carries their mean: a mix of ids 1 and 3 passes for id 2, a rare coincidence
+/// that only loosens the weighting there.
+pub const MATERIAL_TOLERANCE: f32 = 0.25;
+
+/// Where a pixel's plane belongs: its distance from the eye and its material id.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct Key {
+    pub depth: f32,
+    pub material: f32,
+}
+
 /// λ at the top cell, which has no coarse gradient to lean on (zero would bias it): only enough
 /// to keep a frame whose samples lie on one line solvable.
 pub const LAMBDA_TOP: f32 = 1e-6;
@@ -66,8 +79,14 @@ pub struct Cell {
     pub w: f32,
     /// Mean sample position, pixels (pixel centres at +0.5).
     pub mean: [f32; 2],
-    /// Mean depth (any unit) of the samples; after push, the depth the plane belongs to.
+    /// Mean depth (any unit) and material id of the samples; after push, those the plane
+    /// belongs to.
     pub depth: f32,
+    pub material: f32,
+    /// Spread of depth and material id among the samples (weighted variances): a cell that
+    /// straddles an edge lends its plane less, however its means happen to fall.
+    pub depth_var: f32,
+    pub material_var: f32,
     pub c: [f32; 3],
     /// Position scatter: xx, xy, yy.
     pub s: [f32; 3],
@@ -91,11 +110,12 @@ fn union(a: &[[f32; 3]; 2], b: &[[f32; 3]; 2]) -> [[f32; 3]; 2] {
 
 impl Cell {
     /// A sample at pixel (x, y).
-    pub fn sample(x: u32, y: u32, c: [f32; 3], depth: f32) -> Cell {
+    pub fn sample(x: u32, y: u32, c: [f32; 3], key: Key) -> Cell {
         Cell {
             w: 1.0,
             mean: [x as f32 + 0.5, y as f32 + 0.5],
-            depth,
+            depth: key.depth,
+            material: key.material,
             c,
             range: [c, c],
             ..Cell::default()
@@ -126,11 +146,15 @@ impl Cell {
                 out.mean[a] += k * ch.mean[a];
             }
             out.depth += k * ch.depth;
+            out.material += k * ch.material;
             for (o, c) in out.c.iter_mut().zip(ch.c) {
                 *o += k * c;
             }
         }
         for ch in children.iter().filter(|c| c.w > 0.0) {
+            let k = ch.w / out.w;
+            out.depth_var += k * (ch.depth_var + (ch.depth - out.depth).powi(2));
+            out.material_var += k * (ch.material_var + (ch.material - out.material).powi(2));
             let d = [ch.mean[0] - out.mean[0], ch.mean[1] - out.mean[1]];
             out.s[0] += ch.s[0] + ch.w * d[0] * d[0];
             out.s[1] += ch.s[1] + ch.w * d[0] * d[1];
@@ -171,7 +195,7 @@ pub fn level_count(width: u32, height: u32) -> u32 {
 
 /// The coarse estimate at a level-`level` cell's centre from the completed level above: value
 /// and gradient blended from the four parents' planes evaluated there, bilinearly and by how
-/// close each parent's depth is to `depth` (`None`: the blend of the parents' depths). Each
+/// close each parent's depth and material are to `key` (`None`: the parents' blend). Each
 /// plane is exact for a linear function, so any normalised weights keep it exact. The result's
 /// range is the union of the parents' sample ranges.
 pub fn coarse_plane(
@@ -179,7 +203,7 @@ pub fn coarse_plane(
     parent_size: (u32, u32),
     level: u32,
     (x, y): (u32, u32),
-    depth: Option<f32>,
+    key: Option<Key>,
 ) -> Cell {
     let s = (1u32 << level) as f32;
     let centre = [(x as f32 + 0.5) * s, (y as f32 + 0.5) * s];
@@ -199,10 +223,18 @@ pub fn coarse_plane(
             i += 1;
         }
     }
-    let target = depth.unwrap_or_else(|| parents.iter().map(|(p, _, k)| k * p.depth).sum());
+    let target = key.unwrap_or_else(|| Key {
+        depth: parents.iter().map(|(p, _, k)| k * p.depth).sum(),
+        material: parents.iter().map(|(p, _, k)| k * p.material).sum(),
+    });
+    // The expected squared difference between the target and a sample under the parent:
+    // the means' difference squared plus the parent's spread.
     let weight = |p: &Cell, k: f32| {
-        let r = (p.depth - target) / (DEPTH_TOLERANCE * target.abs()).max(1e-12);
-        k / (1.0 + r * r)
+        let scale = (DEPTH_TOLERANCE * target.depth.abs()).max(1e-12);
+        let r2 = ((p.depth - target.depth).powi(2) + p.depth_var) / (scale * scale);
+        let m2 = ((p.material - target.material).powi(2) + p.material_var)
+            / (MATERIAL_TOLERANCE * MATERIAL_TOLERANCE);
+        k / ((1.0 + r2) * (1.0 + m2))
     };
     let mut total: f32 = parents.iter().map(|(p, _, k)| weight(p, *k)).sum();
     // Every parent on another surface: plain bilinear rather than dividing by nothing.
@@ -211,7 +243,8 @@ pub fn coarse_plane(
         total = 1.0;
     }
     let mut out = Cell {
-        depth: target,
+        depth: target.depth,
+        material: target.material,
         ..Cell::empty()
     };
     for (p, pc, k) in &parents {
@@ -260,6 +293,9 @@ pub fn complete(cell: &Cell, coarse: &Cell, ridge: f32, level: u32, (x, y): (u32
         w: 1.0,
         mean: centre,
         depth: cell.depth,
+        material: cell.material,
+        depth_var: cell.depth_var,
+        material_var: cell.material_var,
         range,
         ..Cell::default()
     };
@@ -280,17 +316,30 @@ pub fn complete(cell: &Cell, coarse: &Cell, ridge: f32, level: u32, (x, y): (u32
     out
 }
 
-/// Fills every pixel from the samples (`None`: no sample) and every pixel's depth. Pixels with
-/// a sample keep it.
+/// Fills every pixel from the samples (`None`: no sample) and every pixel's depth and material.
+/// Pixels with a sample keep it.
 pub fn reconstruct(
     width: u32,
     height: u32,
     samples: &[Option<[f32; 3]>],
-    depth: &[f32],
+    keys: &[Key],
 ) -> Vec<[f32; 3]> {
+    pyramid(width, height, samples, keys)[0]
+        .iter()
+        .map(|c| c.c)
+        .collect()
+}
+
+/// Every level after push, pixels first: each cell's plane (value at its centre, gradient).
+pub fn pyramid(
+    width: u32,
+    height: u32,
+    samples: &[Option<[f32; 3]>],
+    keys: &[Key],
+) -> Vec<Vec<Cell>> {
     let mut levels: Vec<Vec<Cell>> = vec![(0..width * height)
         .map(|k| match samples[k as usize] {
-            Some(c) => Cell::sample(k % width, k / width, c, depth[k as usize]),
+            Some(c) => Cell::sample(k % width, k / width, c, keys[k as usize]),
             None => Cell::empty(),
         })
         .collect()];
@@ -327,18 +376,22 @@ pub fn reconstruct(
             for x in 0..w {
                 let k = (y * w + x) as usize;
                 let cell = cells[k];
-                // Pixels know their depth from the G-buffer; a cell with samples, theirs.
+                // Pixels know their depth and material from the G-buffer; a cell with samples,
+                // theirs.
                 let target = if l == 0 {
-                    Some(depth[k])
+                    Some(keys[k])
                 } else {
-                    (cell.w > 0.0).then_some(cell.depth)
+                    (cell.w > 0.0).then_some(Key {
+                        depth: cell.depth,
+                        material: cell.material,
+                    })
                 };
                 let coarse = coarse_plane(parent, parent_size, l, (x, y), target);
                 cells[k] = complete(&cell, &coarse, LAMBDA, l, (x, y));
             }
         }
     }
-    levels[0].iter().map(|c| c.c).collect()
+    levels
 }
 
 #[cfg(test)]
@@ -351,7 +404,7 @@ mod tests {
         let pts = [(0u32, 0u32), (1, 0), (1, 1)];
         let cells: Vec<Cell> = pts
             .iter()
-            .map(|&(x, y)| Cell::sample(x, y, f(x as f32 + 0.5, y as f32 + 0.5), 1.0))
+            .map(|&(x, y)| Cell::sample(x, y, f(x as f32 + 0.5, y as f32 + 0.5), Key::default()))
             .collect();
         let m = Cell::merge(&cells);
         // W clamps to 1; the plane through the three samples is still recovered exactly, both

@@ -18,6 +18,9 @@ pub struct Point {
     pub flip: f64,
     pub preset: bool,
     pub pareto: bool,
+    /// Where a foveated configuration would sit if its frame cost `full`'s times the share of
+    /// pixels it shades: the distance to the limit, drawn as a hollow marker joined to the point.
+    pub ideal_ms: Option<f64>,
 }
 
 pub struct BenchPlot {
@@ -48,26 +51,30 @@ fn median(mut v: Vec<f64>) -> f64 {
 
 impl BenchPlot {
     pub fn of(report: &BenchReport) -> BenchPlot {
-        let mut by_config: BTreeMap<&str, (Vec<f64>, Vec<f64>)> = BTreeMap::new();
+        let mut by_config: BTreeMap<&str, (Vec<f64>, Vec<f64>, Vec<f64>)> = BTreeMap::new();
         let mut order = Vec::new();
         for r in &report.records {
             let e = by_config.entry(&r.config).or_insert_with(|| {
                 order.push(r.config.as_str());
-                (Vec::new(), Vec::new())
+                (Vec::new(), Vec::new(), Vec::new())
             });
             e.0.push(r.frame_ms.median);
             e.1.push(r.errors.flip);
+            if let (Some(a), Some(i)) = (r.speedup_vs_full, r.ideal_vs_full) {
+                e.2.push(r.frame_ms.median * a / i);
+            }
         }
         let mut points: Vec<Point> = order
             .iter()
             .filter_map(|name| {
-                let (t, f) = by_config.get(name)?;
+                let (t, f, ideal) = by_config.get(name)?;
                 Some(Point {
                     name: name.to_string(),
                     frame_ms: median(t.clone()),
                     flip: median(f.clone()),
                     preset: crate::settings::Preset::from_name(name).is_some(),
                     pareto: false,
+                    ideal_ms: (!ideal.is_empty()).then(|| median(ideal.clone())),
                 })
             })
             .filter(|p| p.frame_ms.is_finite() && p.flip.is_finite() && p.frame_ms > 0.0)
@@ -104,7 +111,8 @@ impl Plot for BenchPlot {
             return Ok(());
         }
         let (tlo, thi) = self.points.iter().fold((f64::MAX, f64::MIN), |(a, b), p| {
-            (a.min(p.frame_ms), b.max(p.frame_ms))
+            let lo = p.ideal_ms.filter(|v| *v > 0.0).unwrap_or(p.frame_ms);
+            (a.min(p.frame_ms).min(lo), b.max(p.frame_ms))
         });
         let fhi = self.points.iter().map(|p| p.flip).fold(0.0, f64::max);
         let mut chart = ChartBuilder::on(root)
@@ -142,6 +150,31 @@ impl Plot for BenchPlot {
             .legend(|(x, y)| {
                 PathElement::new(vec![(x, y), (x + 20, y)], colour(1).stroke_width(2))
             });
+        let ideal: Vec<(&Point, f64)> = self
+            .points
+            .iter()
+            .filter_map(|p| Some((p, p.ideal_ms.filter(|v| *v > 0.0)?)))
+            .collect();
+        if !ideal.is_empty() {
+            let c = colour(3);
+            for (p, i) in &ideal {
+                chart
+                    .draw_series(std::iter::once(PathElement::new(
+                        vec![(*i, p.flip), (p.frame_ms, p.flip)],
+                        c.mix(0.5).stroke_width(1),
+                    )))
+                    .map_err(err)?;
+            }
+            chart
+                .draw_series(
+                    ideal
+                        .iter()
+                        .map(|(p, i)| Circle::new((*i, p.flip), 5, c.stroke_width(2))),
+                )
+                .map_err(err)?
+                .label("ideal: full × shaded share")
+                .legend(move |(x, y)| Circle::new((x + 10, y), 5, c.stroke_width(2)));
+        }
         for (preset, name) in [(true, "preset"), (false, "other configuration")] {
             let c = if preset { colour(0) } else { colour(5) };
             let size = if preset { 6 } else { 4 };

@@ -7,6 +7,7 @@ use bytemuck::{Pod, Zeroable};
 
 use crate::foveation::pull_push::{
     level_count, level_size, DEMODULATION_FLOOR, DEPTH_TOLERANCE, LAMBDA, LAMBDA_TOP,
+    MATERIAL_TOLERANCE,
 };
 use crate::render::graph::{
     dynamic_uniform, read, texture, uniform, write, DispatchSize, GraphError, PassDecl, Recorder,
@@ -15,8 +16,9 @@ use crate::render::graph::{
 /// Uniform slots start at multiples of the device's offset alignment (256 by default).
 pub const SLOT: u64 = 256;
 
-/// Bytes of one pyramid cell: six vec4 (moments, depth and sample range; then the plane).
-pub const CELL_BYTES: u64 = 96;
+/// Bytes of one pyramid cell: seven vec4 (moments, depth and material with their spreads,
+/// sample range; then the plane).
+pub const CELL_BYTES: u64 = 112;
 
 pub const PASS: PassDecl = PassDecl {
     label: "pull_push",
@@ -50,6 +52,8 @@ pub struct Level {
     floor: f32,
     child_offset: u32,
     depth_tolerance: f32,
+    material_tolerance: f32,
+    pad: [u32; 3],
 }
 
 /// Levels above the pixels the GPU keeps (at least one, so a 1×1 frame has a top cell).
@@ -93,6 +97,7 @@ fn slots(width: u32, height: u32) -> Vec<(&'static str, Level)> {
             level: l,
             floor: DEMODULATION_FLOOR,
             depth_tolerance: DEPTH_TOLERANCE,
+            material_tolerance: MATERIAL_TOLERANCE,
             ..Level::default()
         };
         if l == 1 {
@@ -113,6 +118,7 @@ fn slots(width: u32, height: u32) -> Vec<(&'static str, Level)> {
             ridge: if l == top { LAMBDA_TOP } else { LAMBDA },
             floor: DEMODULATION_FLOOR,
             depth_tolerance: DEPTH_TOLERANCE,
+            material_tolerance: MATERIAL_TOLERANCE,
             ..Level::default()
         };
         if l < top {
@@ -131,6 +137,7 @@ fn slots(width: u32, height: u32) -> Vec<(&'static str, Level)> {
             has_parent: 1,
             floor: DEMODULATION_FLOOR,
             depth_tolerance: DEPTH_TOLERANCE,
+            material_tolerance: MATERIAL_TOLERANCE,
             ..Level::default()
         },
     ));
