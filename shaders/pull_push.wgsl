@@ -85,14 +85,14 @@ fn store_cell(i: u32, v: Cell) {
 // ambient, on the albedo, plus the floor. Reconstruction works on colour / proxy, so texture,
 // normal-map and shading-normal detail come back per pixel and only what the proxy misses
 // (shadows, specular, subsurface light, other lights) is interpolated.
-fn proxy(p: vec2<i32>) -> vec3<f32> {
-    let a = textureLoad(albedo_tex, p, 0).rgb;
-    return lambert(textureLoad(normal_distance, p, 0).xyz, a) + level.floor;
+// `nd` and `albedo` are the pixel's G-buffer texels.
+fn proxy(nd: vec4<f32>, albedo: vec4<f32>) -> vec3<f32> {
+    return lambert(nd.xyz, albedo.rgb) + level.floor;
 }
 
-// The pixel's material id (the G-buffer albedo's alpha, stored as id / 255).
-fn material_of(p: vec2<i32>) -> f32 {
-    return round(textureLoad(albedo_tex, p, 0).a * 255.0);
+// The pixel's material id (the G-buffer albedo's alpha holds id / 255).
+fn material_of(albedo: vec4<f32>) -> f32 {
+    return round(albedo.a * 255.0);
 }
 
 // A pixel as a cell: its demodulated colour when it holds a sample, else empty.
@@ -100,11 +100,13 @@ fn pixel_cell(p: vec2<i32>) -> Cell {
     var out = empty_cell();
     let f = flags[index_of(p)];
     if ((f & FLAG_COVERED) != 0u && (f & (FLAG_SAMPLED | FLAG_REUSED)) != 0u) {
-        out.c = color[index_of(p)].rgb / proxy(p);
+        let nd = textureLoad(normal_distance, p, 0);
+        let albedo = textureLoad(albedo_tex, p, 0);
+        out.c = color[index_of(p)].rgb / proxy(nd, albedo);
         out.w = 1.0;
         out.mean = vec2<f32>(p) + 0.5;
-        out.depth = textureLoad(normal_distance, p, 0).w;
-        out.material = material_of(p);
+        out.depth = nd.w;
+        out.material = material_of(albedo);
         out.lo = out.c;
         out.hi = out.c;
     }
@@ -384,11 +386,13 @@ fn push_pixels(@builtin(global_invocation_id) id: vec3<u32>) {
         return;
     }
     // Bounded by the samples around the pixel: a plane cannot overshoot what they hold.
-    let key = vec2<f32>(textureLoad(normal_distance, p, 0).w, material_of(p));
+    let nd = textureLoad(normal_distance, p, 0);
+    let albedo = textureLoad(albedo_tex, p, 0);
+    let key = vec2<f32>(nd.w, material_of(albedo));
     let coarse = coarse_plane(vec2<f32>(p) + 0.5, 0u, key);
     var lit = coarse.c;
     if (all(coarse.lo <= coarse.hi)) {
         lit = clamp(lit, coarse.lo, coarse.hi);
     }
-    out_resolved[k] = vec4<f32>(max(lit * proxy(p), vec3<f32>(0.0)), 1.0);
+    out_resolved[k] = vec4<f32>(max(lit * proxy(nd, albedo), vec3<f32>(0.0)), 1.0);
 }

@@ -570,3 +570,69 @@ fn pull_push_on_the_gpu_matches_its_cpu_twin() {
         assert!(frame.sampled > 0.0 || w * h == 1);
     }
 }
+
+#[test]
+fn edges_at_the_mar_ask_for_sqrt_p_and_only_material_changes_count_when_demodulated() {
+    // The same frame three ways: eq. 3 (an edge asks for 1), edges at the MAR (S·√p), and
+    // pull-push (albedo edges within a material ask for nothing). Saliency only ever raises the
+    // acuity probability, and by no more than each rule allows.
+    let mut r = renderer();
+    let (w, h) = (160, 120);
+    let mut maps = Vec::new();
+    for (stream, at_mar, reconstruction) in [
+        (11, false, Reconstruction::Sibson),
+        (12, true, Reconstruction::Sibson),
+        (13, false, Reconstruction::PullPush),
+    ] {
+        let mut req = foveated("balanced", w, h, [0.2, 0.3]);
+        req.stream = stream;
+        req.settings.foveation.motion = false;
+        req.settings.foveation.edges_at_mar = at_mar;
+        req.settings.foveation.reconstruction = reconstruction;
+        r.render(&req).unwrap();
+        maps.push(inspect(&r, &req));
+    }
+    let mut plain = foveated("balanced", w, h, [0.2, 0.3]);
+    plain.stream = 14;
+    plain.settings.foveation.motion = false;
+    plain.settings.foveation.saliency = false;
+    r.render(&plain).unwrap();
+    let acuity = inspect(&r, &plain).probability;
+    let (mut raised_full, mut raised_mar) = (0usize, 0usize);
+    for k in 0..(w * h) as usize {
+        if maps[0].flags[k] & FLAG_COVERED == 0 {
+            continue;
+        }
+        let p = acuity[k];
+        let (full, mar, demod) = (
+            maps[0].probability[k],
+            maps[1].probability[k],
+            maps[2].probability[k],
+        );
+        assert!(
+            full >= p - 1e-6 && mar >= p - 1e-6 && demod >= p - 1e-6,
+            "pixel {k}"
+        );
+        assert!(
+            mar <= p.sqrt().max(p) + 1e-5,
+            "pixel {k}: {mar} above √p = {}",
+            p.sqrt()
+        );
+        assert!(
+            demod <= full + 1e-6,
+            "pixel {k}: demodulated {demod} above eq. 3's {full}"
+        );
+        raised_full += usize::from(full > p + 1e-3);
+        raised_mar += usize::from(mar > p + 1e-3);
+    }
+    assert!(
+        raised_full > 100,
+        "the bunny's silhouette and creases raise eq. 3: {raised_full}"
+    );
+    assert!(raised_mar > 0 && raised_mar <= raised_full);
+    let total = |m: &Inspection| m.probability.iter().map(|v| f64::from(*v)).sum::<f64>();
+    assert!(
+        total(&maps[1]) < total(&maps[0]),
+        "edges at the MAR ask for fewer samples"
+    );
+}

@@ -256,6 +256,7 @@ export function sendSettings(presetChanged = false) {
     if (v !== '' && !presetChanged) msg[name] = Number(v);
   }
   if (controls.reconstruction.dataset.touched && !presetChanged) msg.reconstruction = controls.reconstruction.value;
+  if (controls.edges_at_mar.dataset.touched && !presetChanged) msg.edges_at_mar = controls.edges_at_mar.checked;
   send(msg);
   expectFrame();
 }

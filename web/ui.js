@@ -7,6 +7,7 @@ export const controls = {
   scene: $('scene'), size: $('size'), codec: $('codec'), preset: $('preset'),
   overlay: $('overlay-mode'), dof: $('dof'), pupil: $('pupil'), predict: $('predict'),
   auto: $('auto-gaze'), ring: $('fovea-ring'), reconstruction: $('reconstruction'),
+  edges_at_mar: $('edges_at_mar'),
   mar_slope: $('mar_slope'), mar_w0_deg: $('mar_w0_deg'), min_probability: $('min_probability'),
 };
 
@@ -137,12 +138,16 @@ export function bindControls(app) {
       controls[name].placeholder = 'preset';
     }
     delete controls.reconstruction.dataset.touched;
+    delete controls.edges_at_mar.dataset.touched;
+    controls.edges_at_mar.checked = false;
     app.sendSettings(true);
   });
-  controls.reconstruction.addEventListener('change', () => {
-    controls.reconstruction.dataset.touched = '1';
-    app.sendSettings();
-  });
+  for (const el of [controls.reconstruction, controls.edges_at_mar]) {
+    el.addEventListener('change', () => {
+      el.dataset.touched = '1';
+      app.sendSettings();
+    });
+  }
   for (const el of [controls.overlay, controls.dof, controls.predict, controls.mar_slope, controls.mar_w0_deg, controls.min_probability]) {
     el.addEventListener('change', () => app.sendSettings());
   }

@@ -114,21 +114,11 @@ pub fn sweep(which: &str) -> Result<Vec<BenchConfig>, String> {
     knobs.push(BenchConfig::variant("balanced nearest".into(), |s| {
         s.foveation.reconstruction = Reconstruction::Nearest
     }));
-    knobs.push(BenchConfig::variant("balanced edges-at-mar".into(), |s| {
-        s.foveation.edges_at_mar = true
-    }));
-    knobs.push(BenchConfig::variant(
-        "balanced pull-push edges-at-mar".into(),
-        |s| {
-            s.foveation.reconstruction = Reconstruction::PullPush;
-            s.foveation.edges_at_mar = true
-        },
-    ));
     knobs.push(BenchConfig::variant("balanced sibson".into(), |s| {
         s.foveation.reconstruction = Reconstruction::Sibson
     }));
-    knobs.push(BenchConfig::variant("balanced pull-push".into(), |s| {
-        s.foveation.reconstruction = Reconstruction::PullPush
+    knobs.push(BenchConfig::variant("balanced edges-at-mar".into(), |s| {
+        s.foveation.edges_at_mar = true
     }));
     knobs.push(BenchConfig::variant("balanced white-noise".into(), |s| {
         s.foveation.noise = Noise::White

@@ -9,8 +9,8 @@ use fovea::render::Renderer;
 
 #[derive(clap::Args)]
 pub struct BenchArgs {
-    /// Scenes, comma-separated (built-in: bunny-marble, bunny-skin, materials, opaque, bunny,
-    /// cornell).
+    /// Scenes, comma-separated (built-in: gallery, bunny-marble, bunny-skin, materials, opaque,
+    /// bunny, cornell).
     #[arg(long, default_value = fovea::scene::DEFAULT_SCENE)]
     pub scene: String,
     /// Frame sizes WxH, comma-separated.

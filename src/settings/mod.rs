@@ -193,7 +193,7 @@ pub enum Preset {
     Full,
     /// Foveated, linear probability, ξ = 0.1.
     Quality,
-    /// Foveated, density probability, ξ = 0.05: the default.
+    /// Foveated, density probability, ξ = 0.05, pull-push reconstruction: the default.
     Balanced,
     /// Foveated, steeper MAR, ξ = 0.02, nearest-sample reconstruction, a coarser cut.
     Fast,
@@ -294,8 +294,11 @@ impl RenderSettings {
                 min_probability: 0.1,
                 ..on
             },
+            // Pull-push: cheaper than JFA + Sibson on 11 of 14 scene/size groups and closer to
+            // `full` in FLIP on 10 (docs/foveation.md, one bench run).
             Preset::Balanced => Foveation {
                 min_probability: 0.05,
+                reconstruction: Reconstruction::PullPush,
                 ..on
             },
             Preset::Fast => Foveation {
