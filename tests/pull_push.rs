@@ -1,6 +1,15 @@
 //! Pull-push reconstruction (CPU twin of `shaders/pull_push.wgsl`) at its extremes: constant and
 //! linear functions, empty/full/single-sample frames, 1×1, odd and non-power-of-two sizes, and
-//! against nearest-sample and Sibson reconstruction on a smooth image.
+//! against nearest-sample and Sibson reconstruction on a smooth image; then the GPU pass against
+//! the twin, and the sampling rules that go with it (edges at the MAR, material edges).
+
+mod common;
+
+use common::images::LAVAPIPE;
+use fovea::render::uniforms::{FLAG_COVERED, FLAG_REUSED, FLAG_SAMPLED};
+use fovea::render::{FrameRequest, Inspection, Renderer};
+use fovea::scene::Scene;
+use fovea::settings::Reconstruction;
 
 use fovea::foveation::pull_push::{reconstruct, Key};
 use fovea::foveation::reconstruct::{
@@ -314,4 +323,159 @@ fn planes_do_not_reach_across_a_material_boundary() {
     let (with, without) = (worst(&keys), worst(&flat(w, h)));
     eprintln!("ceiling error (mean, max): {with:?} with materials, {without:?} without");
     assert!(with.0 < 0.5 * without.0 && with.1 < 0.5 * without.1);
+}
+
+fn renderer() -> Renderer {
+    Renderer::new().unwrap_or_else(|e| panic!("GPU tests need an adapter: {e}"))
+}
+
+fn foveated(preset: &str, w: u32, h: u32, gaze: [f32; 2]) -> FrameRequest {
+    let mut r = FrameRequest::new("bunny", w, h);
+    r.settings =
+        fovea::settings::RenderSettings::of(fovea::settings::Preset::from_name(preset).unwrap());
+    r.gaze = gaze;
+    r
+}
+
+fn inspect(r: &Renderer, req: &FrameRequest) -> Inspection {
+    r.inspect(req.stream, &req.scene, req.width, req.height)
+        .unwrap()
+}
+
+#[test]
+fn pull_push_on_the_gpu_matches_its_cpu_twin() {
+    use fovea::foveation::pull_push;
+    let mut r = renderer();
+    let scene = Scene::builtin("bunny").unwrap();
+    let light = scene
+        .file
+        .light
+        .color
+        .map(|c| c * scene.file.light.intensity);
+    // Odd, non-power-of-two sizes, the gaze off centre, and a frame of a single pixel.
+    for (stream, (w, h), gaze) in [
+        (1, (97, 61), [0.3, 0.4]),
+        (2, (64, 48), [0.9, 0.1]),
+        (3, (1, 1), [0.5, 0.5]),
+    ] {
+        let mut req = foveated("balanced", w, h, gaze);
+        req.stream = stream;
+        req.settings.foveation.reconstruction = Reconstruction::PullPush;
+        let frame = r.render(&req).unwrap();
+        let img = inspect(&r, &req);
+        assert!(img.resolved.iter().flatten().all(|v| v.is_finite()), "NaN or inf");
+        let n = (w * h) as usize;
+        let to_light = req.light_direction(&scene).to_array();
+        let albedo = |k: usize| {
+            let a = img.albedo[k].map(|v| f32::from(v) / 255.0);
+            let n = img.normal_distance[k];
+            pull_push::proxy(
+                [a[0], a[1], a[2]],
+                [n[0], n[1], n[2]],
+                to_light,
+                light,
+                scene.file.ambient,
+            )
+        };
+        let has_sample = |k: usize| {
+            img.flags[k] & FLAG_COVERED != 0 && img.flags[k] & (FLAG_SAMPLED | FLAG_REUSED) != 0
+        };
+        let samples: Vec<Option<[f32; 3]>> = (0..n)
+            .map(|k| {
+                let a = albedo(k);
+                has_sample(k).then(|| std::array::from_fn(|c| img.color[k][c] / a[c]))
+            })
+            .collect();
+        let keys: Vec<pull_push::Key> = (0..n)
+            .map(|k| pull_push::Key {
+                depth: img.normal_distance[k][3],
+                material: f32::from(img.albedo[k][3]),
+            })
+            .collect();
+        let cpu = pull_push::reconstruct(w, h, &samples, &keys);
+        let mut worst = 0.0f32;
+        for k in 0..n {
+            if img.flags[k] & FLAG_COVERED == 0 {
+                continue;
+            }
+            let a = albedo(k);
+            for c in 0..3 {
+                let want = (cpu[k][c] * a[c]).max(0.0);
+                let got = img.resolved[k][c];
+                worst = worst.max((got - want).abs() / want.abs().max(0.05));
+            }
+        }
+        // f32 with the GPU's fused multiply-adds against the CPU's separate ones, over ~10 levels.
+        assert!(
+            worst < 1e-3,
+            "{w}x{h}: GPU and CPU differ by {worst} (relative, from {LAVAPIPE})"
+        );
+        assert!(frame.sampled > 0.0 || w * h == 1);
+    }
+}
+
+#[test]
+fn edges_at_the_mar_ask_for_sqrt_p_and_only_material_changes_count_when_demodulated() {
+    // The same frame three ways: eq. 3 (an edge asks for 1), edges at the MAR (S·√p), and
+    // pull-push (albedo edges within a material ask for nothing). Saliency only ever raises the
+    // acuity probability, and by no more than each rule allows.
+    let mut r = renderer();
+    let (w, h) = (160, 120);
+    let mut maps = Vec::new();
+    for (stream, at_mar, reconstruction) in [
+        (11, false, Reconstruction::Sibson),
+        (12, true, Reconstruction::Sibson),
+        (13, false, Reconstruction::PullPush),
+    ] {
+        let mut req = foveated("balanced", w, h, [0.2, 0.3]);
+        req.stream = stream;
+        req.settings.foveation.motion = false;
+        req.settings.foveation.edges_at_mar = at_mar;
+        req.settings.foveation.reconstruction = reconstruction;
+        r.render(&req).unwrap();
+        maps.push(inspect(&r, &req));
+    }
+    let mut plain = foveated("balanced", w, h, [0.2, 0.3]);
+    plain.stream = 14;
+    plain.settings.foveation.motion = false;
+    plain.settings.foveation.saliency = false;
+    r.render(&plain).unwrap();
+    let acuity = inspect(&r, &plain).probability;
+    let (mut raised_full, mut raised_mar) = (0usize, 0usize);
+    for k in 0..(w * h) as usize {
+        if maps[0].flags[k] & FLAG_COVERED == 0 {
+            continue;
+        }
+        let p = acuity[k];
+        let (full, mar, demod) = (
+            maps[0].probability[k],
+            maps[1].probability[k],
+            maps[2].probability[k],
+        );
+        assert!(
+            full >= p - 1e-6 && mar >= p - 1e-6 && demod >= p - 1e-6,
+            "pixel {k}"
+        );
+        assert!(
+            mar <= p.sqrt().max(p) + 1e-5,
+            "pixel {k}: {mar} above √p = {}",
+            p.sqrt()
+        );
+        assert!(
+            demod <= full + 1e-6,
+            "pixel {k}: demodulated {demod} above eq. 3's {full}"
+        );
+        raised_full += usize::from(full > p + 1e-3);
+        raised_mar += usize::from(mar > p + 1e-3);
+    }
+    assert!(
+        raised_full > 100,
+        "the bunny's silhouette and creases raise eq. 3: {raised_full}"
+    );
+    assert!(raised_mar > 0 && raised_mar <= raised_full);
+    let total = |m: &Inspection| m.probability.iter().map(|v| f64::from(*v)).sum::<f64>();
+    assert!(
+        total(&maps[1]) < total(&maps[0]),
+        "edges at the MAR ask for fewer samples"
+    );
 }
