@@ -163,7 +163,7 @@ fn levels(
             if ins.flags[k] & FLAG_COVERED == 0 {
                 continue;
             }
-            let (x, y) = (k as u32 % w >> level, k as u32 / w >> level);
+            let (x, y) = ((k as u32 % w) >> level, (k as u32 / w) >> level);
             let c = cells[(y * lw + x) as usize].c;
             for ch in 0..3 {
                 let linear = (c[ch] * proxy[k][ch]).clamp(0.0, 1.0);

@@ -363,7 +363,10 @@ fn pull_push_on_the_gpu_matches_its_cpu_twin() {
         req.settings.foveation.reconstruction = Reconstruction::PullPush;
         let frame = r.render(&req).unwrap();
         let img = inspect(&r, &req);
-        assert!(img.resolved.iter().flatten().all(|v| v.is_finite()), "NaN or inf");
+        assert!(
+            img.resolved.iter().flatten().all(|v| v.is_finite()),
+            "NaN or inf"
+        );
         let n = (w * h) as usize;
         let to_light = req.light_direction(&scene).to_array();
         let albedo = |k: usize| {

@@ -159,9 +159,9 @@ impl Cell {
             out.s[0] += ch.s[0] + ch.w * d[0] * d[0];
             out.s[1] += ch.s[1] + ch.w * d[0] * d[1];
             out.s[2] += ch.s[2] + ch.w * d[1] * d[1];
-            for a in 0..2 {
-                for ch_i in 0..3 {
-                    out.t[a][ch_i] += ch.t[a][ch_i] + ch.w * d[a] * (ch.c[ch_i] - out.c[ch_i]);
+            for (t, (ch_t, d)) in out.t.iter_mut().zip(ch.t.iter().zip(d)) {
+                for c in 0..3 {
+                    t[c] += ch_t[c] + ch.w * d * (ch.c[c] - out.c[c]);
                 }
             }
         }

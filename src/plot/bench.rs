@@ -51,7 +51,9 @@ fn median(mut v: Vec<f64>) -> f64 {
 
 impl BenchPlot {
     pub fn of(report: &BenchReport) -> BenchPlot {
-        let mut by_config: BTreeMap<&str, (Vec<f64>, Vec<f64>, Vec<f64>)> = BTreeMap::new();
+        // Per configuration: frame times, FLIPs and ideal frame times over the groups.
+        type Series = (Vec<f64>, Vec<f64>, Vec<f64>);
+        let mut by_config: BTreeMap<&str, Series> = BTreeMap::new();
         let mut order = Vec::new();
         for r in &report.records {
             let e = by_config.entry(&r.config).or_insert_with(|| {
