@@ -31,10 +31,11 @@ struct Level {
 }
 @group(0) @binding(6) var<uniform> level: Level;
 
-// Moments (pull) or plane (push): c, w, mean, scatter s = (xx, xy, yy), t = cross terms or
-// gradient per axis, mean depth and material id with their spreads, sample range. Seven vec4
-// per cell: (c, w), (mean, s.xy), (tx, s.z), (ty, depth), (lo, material), (hi, depth_var),
-// (material_var, 0, 0, 0).
+// Moments (pull): c, w, mean, scatter s = (xx, xy, yy), cross terms t per axis, mean depth and
+// material id with their spreads, sample range (lo, hi over all channels). Six vec4 per cell:
+// (c, w), (mean, s.xy), (tx, s.z), (ty, depth), (lo, hi, material, depth_var),
+// (material_var, 0, 0, 0). After push the cell holds a plane in four of them (`store_plane`),
+// since every plane is read four times per pixel below it.
 struct Cell {
     c: vec3<f32>,
     w: f32,
@@ -43,8 +44,8 @@ struct Cell {
     tx: vec3<f32>,
     ty: vec3<f32>,
     depth: f32,
-    lo: vec3<f32>,
-    hi: vec3<f32>,
+    lo: f32,
+    hi: f32,
     material: f32,
     depth_var: f32,
     material_var: f32,
@@ -54,10 +55,10 @@ const BIG: f32 = 3.0e38;
 
 fn empty_cell() -> Cell {
     let z = vec3<f32>(0.0);
-    return Cell(z, 0.0, vec2<f32>(0.0), z, z, z, 0.0, vec3<f32>(BIG), vec3<f32>(-BIG), 0.0, 0.0, 0.0);
+    return Cell(z, 0.0, vec2<f32>(0.0), z, z, z, 0.0, BIG, -BIG, 0.0, 0.0, 0.0);
 }
 
-const CELL_VEC4S: u32 = 7u;
+const CELL_VEC4S: u32 = 6u;
 
 fn load_cell(i: u32) -> Cell {
     let at = CELL_VEC4S * i;
@@ -66,8 +67,7 @@ fn load_cell(i: u32) -> Cell {
     let c = cells[at + 2u];
     let d = cells[at + 3u];
     let e = cells[at + 4u];
-    let f = cells[at + 5u];
-    return Cell(a.rgb, a.a, b.xy, vec3<f32>(b.z, b.w, c.a), c.rgb, d.rgb, d.a, e.rgb, f.rgb, e.a, f.a, cells[at + 6u].x);
+    return Cell(a.rgb, a.a, b.xy, vec3<f32>(b.z, b.w, c.a), c.rgb, d.rgb, d.a, e.x, e.y, e.z, e.w, cells[at + 5u].x);
 }
 
 fn store_cell(i: u32, v: Cell) {
@@ -76,9 +76,18 @@ fn store_cell(i: u32, v: Cell) {
     cells[at + 1u] = vec4<f32>(v.mean, v.s.x, v.s.y);
     cells[at + 2u] = vec4<f32>(v.tx, v.s.z);
     cells[at + 3u] = vec4<f32>(v.ty, v.depth);
-    cells[at + 4u] = vec4<f32>(v.lo, v.material);
-    cells[at + 5u] = vec4<f32>(v.hi, v.depth_var);
-    cells[at + 6u] = vec4<f32>(v.material_var, 0.0, 0.0, 0.0);
+    cells[at + 4u] = vec4<f32>(v.lo, v.hi, v.material, v.depth_var);
+    cells[at + 5u] = vec4<f32>(v.material_var, 0.0, 0.0, 0.0);
+}
+
+// A completed cell's plane: value and material spread, gradient, depth, range and material.
+// (w is 1 and the moments are spent once a cell is completed, so their slots are reused.)
+fn store_plane(i: u32, v: Cell) {
+    let at = CELL_VEC4S * i;
+    cells[at] = vec4<f32>(v.c, v.material_var);
+    cells[at + 2u] = vec4<f32>(v.tx, 0.0);
+    cells[at + 3u] = vec4<f32>(v.ty, v.depth);
+    cells[at + 4u] = vec4<f32>(v.lo, v.hi, v.material, v.depth_var);
 }
 
 // What the G-buffer alone predicts of a pixel's colour: the key light's Lambert term with the
@@ -107,8 +116,8 @@ fn pixel_cell(p: vec2<i32>) -> Cell {
         out.mean = vec2<f32>(p) + 0.5;
         out.depth = nd.w;
         out.material = material_of(albedo);
-        out.lo = out.c;
-        out.hi = out.c;
+        out.lo = min(out.c.r, min(out.c.g, out.c.b));
+        out.hi = max(out.c.r, max(out.c.g, out.c.b));
     }
     return out;
 }
@@ -197,8 +206,8 @@ struct Plane {
     material_var: f32,
     tx: vec3<f32>,
     ty: vec3<f32>,
-    lo: vec3<f32>,
-    hi: vec3<f32>,
+    lo: f32,
+    hi: f32,
     centre: vec2<f32>,
 }
 
@@ -208,9 +217,8 @@ fn load_plane(q: vec2<i32>, ps: f32) -> Plane {
     let at = CELL_VEC4S * (level.parent_offset + u32(c.y) * level.parent_size.x + u32(c.x));
     let a = cells[at];
     let t = cells[at + 3u];
-    let lo = cells[at + 4u];
-    let hi = cells[at + 5u];
-    return Plane(a.rgb, t.a, lo.a, hi.a, cells[at + 6u].x, cells[at + 2u].rgb, t.rgb, lo.rgb, hi.rgb, (vec2<f32>(c) + 0.5) * ps);
+    let e = cells[at + 4u];
+    return Plane(a.rgb, t.a, e.z, e.w, a.a, cells[at + 2u].rgb, t.rgb, e.x, e.y, (vec2<f32>(c) + 0.5) * ps);
 }
 
 // Bilinear position of a level-`l` centre among the parents: the first parent and the weights.
@@ -231,13 +239,13 @@ struct Blend {
     ck: vec3<f32>,
     txk: vec3<f32>,
     tyk: vec3<f32>,
-    lo: vec3<f32>,
-    hi: vec3<f32>,
+    lo: f32,
+    hi: f32,
 }
 
 fn blend_start() -> Blend {
     let z = vec3<f32>(0.0);
-    return Blend(z, z, z, 0.0, z, z, z, vec3<f32>(BIG), vec3<f32>(-BIG));
+    return Blend(z, z, z, 0.0, z, z, z, BIG, -BIG);
 }
 
 // Adds parent `p` with bilinear weight k, its plane evaluated at `centre`, weighted further by
@@ -335,7 +343,7 @@ fn push(@builtin(global_invocation_id) id: vec3<u32>) {
     }
     let coarse = coarse_plane(centre, level.level, aim);
     if (cell.w <= 0.0) {
-        store_cell(i, coarse);
+        store_plane(i, coarse);
         return;
     }
     let lambda = level.ridge * cell.w * side * side;
@@ -365,7 +373,7 @@ fn push(@builtin(global_invocation_id) id: vec3<u32>) {
     out.material_var = cell.material_var;
     out.lo = min(cell.lo, coarse.lo);
     out.hi = max(cell.hi, coarse.hi);
-    store_cell(i, out);
+    store_plane(i, out);
 }
 
 // Every pixel: background, its own sample, or level 1's planes times its albedo.
@@ -391,8 +399,8 @@ fn push_pixels(@builtin(global_invocation_id) id: vec3<u32>) {
     let key = vec2<f32>(nd.w, material_of(albedo));
     let coarse = coarse_plane(vec2<f32>(p) + 0.5, 0u, key);
     var lit = coarse.c;
-    if (all(coarse.lo <= coarse.hi)) {
-        lit = clamp(lit, coarse.lo, coarse.hi);
+    if (coarse.lo <= coarse.hi) {
+        lit = clamp(lit, vec3<f32>(coarse.lo), vec3<f32>(coarse.hi));
     }
     out_resolved[k] = vec4<f32>(max(lit * proxy(nd, albedo), vec3<f32>(0.0)), 1.0);
 }

@@ -92,20 +92,18 @@ pub struct Cell {
     pub s: [f32; 3],
     /// Cross moments per axis and channel; after push, the gradient per axis and channel.
     pub t: [[f32; 3]; 2],
-    /// Smallest and largest sample value per channel under the cell (after push: around it).
-    pub range: [[f32; 3]; 2],
+    /// Smallest and largest sample value, any channel, under the cell (after push: around it).
+    /// One pair for all channels rather than one per channel: the bound is there to stop a plane
+    /// going below zero or far above the brightest sample, and two floats fit the spare slots of
+    /// the GPU's plane, whose every vec4 is loaded four times per pixel.
+    pub range: [f32; 2],
 }
 
 /// A range that holds nothing (its union with any range is that range).
-pub const EMPTY_RANGE: [[f32; 3]; 2] = [[f32::INFINITY; 3], [f32::NEG_INFINITY; 3]];
+pub const EMPTY_RANGE: [f32; 2] = [f32::INFINITY, f32::NEG_INFINITY];
 
-fn union(a: &[[f32; 3]; 2], b: &[[f32; 3]; 2]) -> [[f32; 3]; 2] {
-    let mut out = *a;
-    for ch in 0..3 {
-        out[0][ch] = a[0][ch].min(b[0][ch]);
-        out[1][ch] = a[1][ch].max(b[1][ch]);
-    }
-    out
+fn union(a: &[f32; 2], b: &[f32; 2]) -> [f32; 2] {
+    [a[0].min(b[0]), a[1].max(b[1])]
 }
 
 impl Cell {
@@ -117,7 +115,7 @@ impl Cell {
             depth: key.depth,
             material: key.material,
             c,
-            range: [c, c],
+            range: [c[0].min(c[1]).min(c[2]), c[0].max(c[1]).max(c[2])],
             ..Cell::default()
         }
     }
@@ -269,9 +267,9 @@ pub fn coarse_plane(
 /// extrapolates.
 pub fn complete(cell: &Cell, coarse: &Cell, ridge: f32, level: u32, (x, y): (u32, u32)) -> Cell {
     let range = union(&cell.range, &coarse.range);
-    let bound = |v: f32, ch: usize| {
-        if level == 0 && range[0][ch] <= range[1][ch] {
-            v.clamp(range[0][ch], range[1][ch])
+    let bound = |v: f32| {
+        if level == 0 && range[0] <= range[1] {
+            v.clamp(range[0], range[1])
         } else {
             v
         }
@@ -279,7 +277,7 @@ pub fn complete(cell: &Cell, coarse: &Cell, ridge: f32, level: u32, (x, y): (u32
     if cell.w <= 0.0 {
         let mut out = *coarse;
         for ch in 0..3 {
-            out.c[ch] = bound(out.c[ch], ch);
+            out.c[ch] = bound(out.c[ch]);
         }
         return out;
     }
@@ -309,7 +307,7 @@ pub fn complete(cell: &Cell, coarse: &Cell, ridge: f32, level: u32, (x, y): (u32
         };
         let own = cell.c[ch] + g[0] * off[0] + g[1] * off[1];
         let v = cell.w * own + (1.0 - cell.w) * coarse.c[ch];
-        out.c[ch] = bound(v, ch);
+        out.c[ch] = bound(v);
         out.t[0][ch] = g[0];
         out.t[1][ch] = g[1];
     }

@@ -16,9 +16,9 @@ use crate::render::graph::{
 /// Uniform slots start at multiples of the device's offset alignment (256 by default).
 pub const SLOT: u64 = 256;
 
-/// Bytes of one pyramid cell: seven vec4 (moments, depth and material with their spreads,
-/// sample range; then the plane).
-pub const CELL_BYTES: u64 = 112;
+/// Bytes of one pyramid cell: six vec4 (moments, depth and material with their spreads, sample
+/// range; then the plane in four of them).
+pub const CELL_BYTES: u64 = 96;
 
 pub const PASS: PassDecl = PassDecl {
     label: "pull_push",
