@@ -6,8 +6,8 @@
 use anyhow::{Context, Result};
 use fovea::foveation::pull_push;
 use fovea::render::uniforms::{FLAG_COVERED, FLAG_REUSED, FLAG_SAMPLED};
-use fovea::render::Inspection;
 use fovea::render::{FrameRequest, Renderer};
+use fovea::render::{Inspection, PullPushInputs};
 use fovea::scene::Scene;
 use fovea::settings::{Preset, Reconstruction, RenderSettings};
 
@@ -119,39 +119,12 @@ fn levels(
 ) -> Result<()> {
     let (w, h) = (req.width, req.height);
     let scene = Scene::builtin(&req.scene)?;
-    let light = scene
-        .file
-        .light
-        .color
-        .map(|c| c * scene.file.light.intensity);
-    let to_light = req.light_direction(&scene).to_array();
     let n = (w * h) as usize;
-    let proxy: Vec<[f32; 3]> = (0..n)
-        .map(|k| {
-            let a = ins.albedo[k].map(|v| f32::from(v) / 255.0);
-            let nd = ins.normal_distance[k];
-            pull_push::proxy(
-                [a[0], a[1], a[2]],
-                [nd[0], nd[1], nd[2]],
-                to_light,
-                light,
-                scene.file.ambient,
-            )
-        })
-        .collect();
-    let samples: Vec<Option<[f32; 3]>> = (0..n)
-        .map(|k| {
-            let f = ins.flags[k];
-            (f & FLAG_COVERED != 0 && f & (FLAG_SAMPLED | FLAG_REUSED) != 0)
-                .then(|| std::array::from_fn(|c| ins.color[k][c] / proxy[k][c]))
-        })
-        .collect();
-    let keys: Vec<pull_push::Key> = (0..n)
-        .map(|k| pull_push::Key {
-            depth: ins.normal_distance[k][3],
-            material: f32::from(ins.albedo[k][3]),
-        })
-        .collect();
+    let PullPushInputs {
+        proxy,
+        samples,
+        keys,
+    } = ins.pull_push_inputs(&scene, req.light_direction(&scene));
     let pyramid = pull_push::pyramid(w, h, &samples, &keys);
     for level in [1u32, 3, 5] {
         let Some(cells) = pyramid.get(level as usize) else {

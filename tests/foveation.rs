@@ -2,32 +2,16 @@
 
 mod common;
 
+use common::frames::{foveated, inspect, renderer};
 use common::images::{assert_image, IDENTICAL, LAVAPIPE};
 use fovea::foveation::rank_map;
 use fovea::foveation::reconstruct::{jfa_with_steps, reconstruct, unpack, NO_SEED};
 use fovea::optics::acuity::{acuity_probability, mar_deg, ProbabilityForm};
 use fovea::render::uniforms::{FLAG_COVERED, FLAG_REUSED, FLAG_SAMPLED};
-use fovea::render::{FrameRequest, Inspection, Renderer};
+use fovea::render::{FrameRequest, Inspection};
 use fovea::scene::Scene;
 use fovea::settings::{Noise, Reconstruction};
 use fovea::viewing::Viewing;
-
-fn renderer() -> Renderer {
-    Renderer::new().unwrap_or_else(|e| panic!("GPU tests need an adapter: {e}"))
-}
-
-fn foveated(preset: &str, w: u32, h: u32, gaze: [f32; 2]) -> FrameRequest {
-    let mut r = FrameRequest::new("bunny", w, h);
-    r.settings =
-        fovea::settings::RenderSettings::of(fovea::settings::Preset::from_name(preset).unwrap());
-    r.gaze = gaze;
-    r
-}
-
-fn inspect(r: &Renderer, req: &FrameRequest) -> Inspection {
-    r.inspect(req.stream, &req.scene, req.width, req.height)
-        .unwrap()
-}
 
 fn assert_finite(what: &str, img: &Inspection) {
     for (k, v) in img.resolved.iter().enumerate() {

@@ -5,9 +5,10 @@
 
 mod common;
 
+use common::frames::{foveated, inspect, renderer};
 use common::images::LAVAPIPE;
-use fovea::render::uniforms::{FLAG_COVERED, FLAG_REUSED, FLAG_SAMPLED};
-use fovea::render::{FrameRequest, Inspection, Renderer};
+use fovea::render::uniforms::FLAG_COVERED;
+use fovea::render::Inspection;
 use fovea::scene::Scene;
 use fovea::settings::Reconstruction;
 
@@ -325,33 +326,11 @@ fn planes_do_not_reach_across_a_material_boundary() {
     assert!(with.0 < 0.5 * without.0 && with.1 < 0.5 * without.1);
 }
 
-fn renderer() -> Renderer {
-    Renderer::new().unwrap_or_else(|e| panic!("GPU tests need an adapter: {e}"))
-}
-
-fn foveated(preset: &str, w: u32, h: u32, gaze: [f32; 2]) -> FrameRequest {
-    let mut r = FrameRequest::new("bunny", w, h);
-    r.settings =
-        fovea::settings::RenderSettings::of(fovea::settings::Preset::from_name(preset).unwrap());
-    r.gaze = gaze;
-    r
-}
-
-fn inspect(r: &Renderer, req: &FrameRequest) -> Inspection {
-    r.inspect(req.stream, &req.scene, req.width, req.height)
-        .unwrap()
-}
-
 #[test]
 fn pull_push_on_the_gpu_matches_its_cpu_twin() {
     use fovea::foveation::pull_push;
     let mut r = renderer();
     let scene = Scene::builtin("bunny").unwrap();
-    let light = scene
-        .file
-        .light
-        .color
-        .map(|c| c * scene.file.light.intensity);
     // Odd, non-power-of-two sizes, the gaze off centre, and a frame of a single pixel.
     for (stream, (w, h), gaze) in [
         (1, (97, 61), [0.3, 0.4]),
@@ -368,40 +347,14 @@ fn pull_push_on_the_gpu_matches_its_cpu_twin() {
             "NaN or inf"
         );
         let n = (w * h) as usize;
-        let to_light = req.light_direction(&scene).to_array();
-        let albedo = |k: usize| {
-            let a = img.albedo[k].map(|v| f32::from(v) / 255.0);
-            let n = img.normal_distance[k];
-            pull_push::proxy(
-                [a[0], a[1], a[2]],
-                [n[0], n[1], n[2]],
-                to_light,
-                light,
-                scene.file.ambient,
-            )
-        };
-        let has_sample = |k: usize| {
-            img.flags[k] & FLAG_COVERED != 0 && img.flags[k] & (FLAG_SAMPLED | FLAG_REUSED) != 0
-        };
-        let samples: Vec<Option<[f32; 3]>> = (0..n)
-            .map(|k| {
-                let a = albedo(k);
-                has_sample(k).then(|| std::array::from_fn(|c| img.color[k][c] / a[c]))
-            })
-            .collect();
-        let keys: Vec<pull_push::Key> = (0..n)
-            .map(|k| pull_push::Key {
-                depth: img.normal_distance[k][3],
-                material: f32::from(img.albedo[k][3]),
-            })
-            .collect();
-        let cpu = pull_push::reconstruct(w, h, &samples, &keys);
+        let inputs = img.pull_push_inputs(&scene, req.light_direction(&scene));
+        let cpu = pull_push::reconstruct(w, h, &inputs.samples, &inputs.keys);
         let mut worst = 0.0f32;
         for k in 0..n {
             if img.flags[k] & FLAG_COVERED == 0 {
                 continue;
             }
-            let a = albedo(k);
+            let a = inputs.proxy[k];
             for c in 0..3 {
                 let want = (cpu[k][c] * a[c]).max(0.0);
                 let got = img.resolved[k][c];

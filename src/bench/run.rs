@@ -163,11 +163,11 @@ pub fn run(
                 frames[ci] = Some(frame.rgba);
             }
             let full = opts.configs.iter().position(|c| c.name == "full");
-            if let Some(Some(full_rgba)) = full.map(|i| frames[i].clone()) {
+            if let Some(Some(full_rgba)) = full.map(|i| &frames[i]) {
                 for (ci, config) in opts.configs.iter().enumerate() {
                     if let (Some(rgba), true) = (&frames[ci], config.settings.foveation.enabled) {
                         samples[ci].vs_full.push(quality::measure(
-                            &full_rgba, rgba, *w, *h, &viewing, gaze_px, &weights,
+                            full_rgba, rgba, *w, *h, &viewing, gaze_px, &weights,
                         ));
                     }
                 }

@@ -4,7 +4,10 @@ use super::pass::photons::SIDE as PHOTON_SIDE;
 use super::renderer::Renderer;
 use super::request::Inspection;
 use super::targets::map_read;
+use super::uniforms::{FLAG_COVERED, FLAG_REUSED, FLAG_SAMPLED};
 use super::{Gpu, RenderError};
+use crate::foveation::pull_push::{self, Key};
+use crate::scene::Scene;
 
 impl Renderer {
     /// Reads back the intermediate images of a stream's last frame.
@@ -118,4 +121,63 @@ fn read_texture(
             .flat_map(|c| c[..row as usize].to_vec())
             .collect()
     })
+}
+
+/// What the pull-push pass reconstructs from, rebuilt on the CPU from an inspection, for
+/// `foveation::pull_push` (its GPU-vs-CPU test and the pictures of its levels).
+pub struct PullPushInputs {
+    /// Each pixel's proxy: what the G-buffer alone predicts of its colour.
+    pub proxy: Vec<[f32; 3]>,
+    /// Each shaded or reused pixel's colour over its proxy; `None` for the rest.
+    pub samples: Vec<Option<[f32; 3]>>,
+    /// Each pixel's depth and material id.
+    pub keys: Vec<Key>,
+}
+
+impl Inspection {
+    /// The pull-push inputs of this frame, lit by `scene`'s key light from `to_light`.
+    pub fn pull_push_inputs(&self, scene: &Scene, to_light: glam::Vec3) -> PullPushInputs {
+        let l = &scene.file.light;
+        let light = l.color.map(|c| c * l.intensity);
+        let proxy: Vec<[f32; 3]> = self
+            .albedo
+            .iter()
+            .zip(&self.normal_distance)
+            .map(|(a, nd)| {
+                let a = a.map(|v| f32::from(v) / 255.0);
+                let normal = [nd[0], nd[1], nd[2]];
+                pull_push::proxy(
+                    [a[0], a[1], a[2]],
+                    normal,
+                    to_light.to_array(),
+                    light,
+                    scene.file.ambient,
+                )
+            })
+            .collect();
+        let samples = self
+            .flags
+            .iter()
+            .zip(&self.color)
+            .zip(&proxy)
+            .map(|((f, c), p)| {
+                (f & FLAG_COVERED != 0 && f & (FLAG_SAMPLED | FLAG_REUSED) != 0)
+                    .then(|| std::array::from_fn(|ch| c[ch] / p[ch]))
+            })
+            .collect();
+        let keys = self
+            .normal_distance
+            .iter()
+            .zip(&self.albedo)
+            .map(|(nd, a)| Key {
+                depth: nd[3],
+                material: f32::from(a[3]),
+            })
+            .collect();
+        PullPushInputs {
+            proxy,
+            samples,
+            keys,
+        }
+    }
 }

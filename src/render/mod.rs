@@ -36,6 +36,7 @@ mod turns;
 pub mod uniforms;
 
 pub use device::Gpu;
+pub use inspect::PullPushInputs;
 pub use renderer::Renderer;
 pub use request::{FrameRequest, Inspection, RenderedFrame, DEFAULT_PUPIL_MM, MAX_SIDE, MIN_XI};
 pub use scheduler::SLICE_MS;

@@ -116,22 +116,20 @@ impl FrameTargets {
             "jfa.steps",
             buffer("jfa.steps", steps, B::UNIFORM | B::COPY_DST),
         );
-        r.buffer(
-            "pull_push.cells",
-            buffer(
+        for (name, bytes, usage) in [
+            (
                 "pull_push.cells",
                 pull_push::cells_bytes(width, height),
-                B::STORAGE | B::COPY_SRC,
+                B::STORAGE,
             ),
-        );
-        r.buffer(
-            "pull_push.levels",
-            buffer(
+            (
                 "pull_push.levels",
                 pull_push::levels_bytes(width, height),
                 B::UNIFORM | B::COPY_DST,
             ),
-        );
+        ] {
+            r.buffer(name, buffer(name, bytes, usage));
+        }
         r.buffer("materials.planned", planned_materials);
         FrameTargets {
             resources: r,

@@ -4,6 +4,7 @@
 
 #![allow(dead_code)] // each test binary uses a part of this
 
+pub mod frames;
 pub mod images;
 
 use std::net::SocketAddr;
