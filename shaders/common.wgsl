@@ -222,35 +222,62 @@ struct PunctualLight {
     axis_cos_outer: vec4<f32>,
     // x: cos of the inner angle.
     cone: vec4<f32>,
-    // World → its tile of the spot shadow atlas.
-    view_proj: mat4x4<f32>,
-    // x: tile index, −1 unshadowed; y: a texel's size per unit distance; z: tile side.
+    // World → each of its tiles of the shadow atlas (a spot uses the first, a point light all
+    // six, one per cube face in `cube_face` order).
+    views: array<mat4x4<f32>, 6>,
+    // x: first tile, −1 unshadowed; y: a texel's size per unit distance; z: tile side;
+    // w: tiles per atlas row.
     shadow: vec4<f32>,
 }
 
-// How much of a spot light reaches x (normal n): its tile of `atlas` holds distances to the
-// light; the lookup moves one texel off the surface and allows 1.5 texels of bias, a texel
-// being as wide as the tile's pixels are at x's distance.
-fn spot_shadow(atlas: texture_2d<f32>, li: PunctualLight, x: vec3<f32>, n: vec3<f32>) -> f32 {
+// The cube face that sees direction d from a point light, in the order +X −X +Y −Y +Z −Z: the
+// axis of d's largest component (CPU twin: render::lights::cube_face).
+fn cube_face(d: vec3<f32>) -> u32 {
+    let a = abs(d);
+    if (a.x >= a.y && a.x >= a.z) {
+        return select(0u, 1u, d.x < 0.0);
+    }
+    if (a.y >= a.z) {
+        return select(2u, 3u, d.y < 0.0);
+    }
+    return select(4u, 5u, d.z < 0.0);
+}
+
+// How much of a spot or point light reaches x (normal n): its tile of `atlas` (a point light:
+// the tile of the cube face towards x) holds distances to the light; the lookup moves one texel
+// off the surface and allows 1.5 texels of bias plus 2 × the slope (tan of the light's angle to
+// the normal, at most 8), a texel being as wide as the tile's pixels are at x's distance. The
+// slope term is what keeps a floor lit at grazing light: across the PCF's ±2 texels its own
+// distance to the light changes by about 2 texels × the slope.
+fn punctual_shadow(atlas: texture_2d<f32>, li: PunctualLight, x: vec3<f32>, n: vec3<f32>) -> f32 {
     if (li.shadow.x < 0.0 || has_mode(MODE_NO_SHADOWS)) {
         return 1.0;
     }
-    let texel = li.shadow.y * distance(x, li.position_kind.xyz);
+    let pos = li.position_kind.xyz;
+    let texel = li.shadow.y * distance(x, pos);
     let xo = x + n * texel;
-    let p = li.view_proj * vec4<f32>(xo, 1.0);
+    let point = u32(li.position_kind.w) == 1u;
+    let face = select(0u, cube_face(xo - pos), point);
+    let p = li.views[face] * vec4<f32>(xo, 1.0);
     if (p.w <= 0.0) {
         return 1.0;
     }
-    let ndc = p.xy / p.w;
-    if (any(abs(ndc) > vec2<f32>(1.0))) {
+    var ndc = p.xy / p.w;
+    if (point) {
+        // The face's edge, reached by rounding: the cube leaves no direction out.
+        ndc = clamp(ndc, vec2<f32>(-1.0), vec2<f32>(1.0));
+    } else if (any(abs(ndc) > vec2<f32>(1.0))) {
         return 1.0;
     }
     let side = li.shadow.z;
-    let tile = u32(li.shadow.x);
-    let origin = vec2<f32>(f32(tile % 2u), f32(tile / 2u)) * side;
+    let tile = u32(li.shadow.x) + face;
+    let columns = max(u32(li.shadow.w), 1u);
+    let origin = vec2<f32>(f32(tile % columns), f32(tile / columns)) * side;
     let uv = origin + vec2<f32>(ndc.x * 0.5 + 0.5, 0.5 - ndc.y * 0.5) * side - 0.5;
     let lo = vec2<i32>(origin);
-    let z = distance(xo, li.position_kind.xyz) - 1.5 * texel;
+    let cos_l = clamp(dot(n, normalize(pos - x)), 0.0, 1.0);
+    let slope = min(sqrt(1.0 - cos_l * cos_l) / max(cos_l, 1e-3), 8.0);
+    let z = distance(xo, pos) - (1.5 + 2.0 * slope) * texel;
     return pcf(atlas, uv, z, lo, lo + vec2<i32>(i32(side) - 1));
 }
 

@@ -29,17 +29,17 @@
 @group(0) @binding(11) var irradiance_tex: texture_2d<f32>;
 @group(0) @binding(12) var shadow_tex: texture_2d<f32>;
 @group(0) @binding(13) var<storage, read> lights: array<PunctualLight>;
-@group(0) @binding(14) var spot_shadows: texture_2d<f32>;
+@group(0) @binding(14) var light_shadows: texture_2d<f32>;
 
-// Diffuse `diffuse` and specular light from every extra punctual light (spots with a shadow
-// map are shadowed).
+// Diffuse `diffuse` and specular light from every extra punctual light (spot and point lights
+// with shadow tiles are shadowed).
 fn extra_lights(m: Material, f0: vec3<f32>, diffuse: vec3<f32>, n: vec3<f32>, v: vec3<f32>, x: vec3<f32>) -> vec3<f32> {
     var sum = vec3<f32>(0.0);
     for (var i = 0u; i < frame.light_count; i++) {
         let li = lights[i];
         let le = punctual_light(li, x);
         if (any(le[1] > vec3<f32>(0.0))) {
-            sum += le[1] * spot_shadow(spot_shadows, li, x, n) * surface_light(m, f0, diffuse, n, v, le[0]);
+            sum += le[1] * punctual_shadow(light_shadows, li, x, n) * surface_light(m, f0, diffuse, n, v, le[0]);
         }
     }
     return sum;

@@ -131,7 +131,7 @@ fn check_floor_shadow(
     lit: &Inspection,
     band: f32,
     open_keeps: f32,
-    inside: impl Fn(Vec3) -> Option<f32>,
+    mut inside: impl FnMut(Vec3) -> Option<f32>,
 ) -> (usize, usize) {
     let eye = Vec3::from(scene.file.camera.eye);
     let (mut dark, mut open) = (0, 0);
@@ -206,34 +206,49 @@ fn shadows_fall_where_the_roof_blocks_the_light_with_no_acne_and_no_peter_pannin
     );
 }
 
-#[test]
-fn a_spot_light_casts_its_own_shadow() {
-    let mut r = renderer();
-    let (w, h) = (160, 120);
-    // The key light off; one spot 8 units above the floor, the roof 3 above it.
+/// The key light off, one punctual light `light` (scene JSON), a floor and a 2·`half` square
+/// roof 3 units above it: (the scene, its render unshadowed, its render shadowed).
+fn one_light_over_a_roof(
+    r: &mut Renderer,
+    name: &str,
+    light: serde_json::Value,
+    half: f32,
+    (w, h): (u32, u32),
+) -> (Scene, Inspection, Inspection) {
     let scene = Scene::from_json(
         &json!({
-            "name": "spot", "ambient": 0.0, "background_srgb": [0, 0, 0],
+            "name": name, "ambient": 0.0, "background_srgb": [0, 0, 0],
             "light": {"to_light": [0, 1, 0], "color": [1, 1, 1], "intensity": 0},
-            "lights": [{"kind": "spot", "position": [0, 8, 0], "direction": [0, -1, 0],
-                        "color": [1, 1, 1], "intensity": 64, "inner_deg": 50, "outer_deg": 60}],
+            "lights": [light],
             "camera": {"eye": [0, 16, 14], "target": [0, 0, 0], "fov_y_deg": 50, "near": 0.5, "far": 100},
             "materials": {"floor": {"kind": "opaque", "albedo": [0.8, 0.8, 0.8], "roughness": 1.0}},
             "objects": [
                 {"mesh": "plane", "material": "floor", "scale": 40.0},
-                {"mesh": "quad", "material": "floor", "corners": [[-3, 3, -3], [-3, 3, 3], [3, 3, 3], [3, 3, -3]]}
+                {"mesh": "quad", "material": "floor",
+                 "corners": [[-half, 3, -half], [-half, 3, half], [half, 3, half], [half, 3, -half]]}
             ]
         })
         .to_string(),
     )
     .unwrap();
     r.add_scene(scene.clone()).unwrap();
-    let lit = render(&mut r, &{
-        let mut q = full("spot", w, h, 1);
+    let lit = render(r, &{
+        let mut q = full(name, w, h, 1);
         q.settings.shadows = false;
         q
     });
-    let shadowed = render(&mut r, &full("spot", w, h, 2));
+    let shadowed = render(r, &full(name, w, h, 2));
+    (scene, lit, shadowed)
+}
+
+#[test]
+fn a_spot_light_casts_its_own_shadow() {
+    let mut r = renderer();
+    let (w, h) = (160, 120);
+    // One spot 8 units above the floor, the roof 3 above it.
+    let spot = json!({"kind": "spot", "position": [0, 8, 0], "direction": [0, -1, 0],
+                      "color": [1, 1, 1], "intensity": 64, "inner_deg": 50, "outer_deg": 60});
+    let (scene, lit, shadowed) = one_light_over_a_roof(&mut r, "spot", spot, 3.0, (w, h));
     // Inside the inner cone only (full light); the ray to the light crosses the roof's plane
     // at 5/8 of the point's offset from the axis.
     let cone = 8.0 * 50f32.to_radians().tan() - 0.25;
@@ -244,6 +259,36 @@ fn a_spot_light_casts_its_own_shadow() {
     assert!(
         dark > 200 && open > 200,
         "{dark} shadowed and {open} open floor pixels checked"
+    );
+}
+
+#[test]
+fn a_point_light_casts_a_shadow_across_its_cube_faces() {
+    let mut r = renderer();
+    let (w, h) = (160, 120);
+    // A point light 4 units above the floor, 1 above a 3×3 roof: the roof's shadow reaches 6
+    // units out, past where the downward cube face ends (4 units, 45°), so the shadow's edge
+    // lies in the side faces' tiles and its middle in the bottom face's.
+    let point = json!({"kind": "point", "position": [0, 4, 0], "color": [1, 1, 1], "intensity": 64});
+    let (scene, lit, shadowed) = one_light_over_a_roof(&mut r, "point", point, 1.5, (w, h));
+    // The ray to the light crosses the roof's plane at 1/4 of the point's offset; open floor
+    // is checked out to 12 units (the light 18° above the floor).
+    let (mut edge_beyond_bottom_face, mut far_open) = (0, 0);
+    let (dark, open) = check_floor_shadow(&scene, (w, h), &shadowed, &lit, 0.1, 0.99, |x| {
+        let reach = x.x.abs().max(x.z.abs());
+        let depth = 1.5 - reach / 4.0;
+        if reach > 4.0 && depth > 0.1 {
+            edge_beyond_bottom_face += 1;
+        }
+        if reach > 6.5 && reach < 12.0 {
+            far_open += 1;
+        }
+        (reach < 12.0).then_some(depth)
+    });
+    assert!(
+        dark > 200 && open > 200 && edge_beyond_bottom_face > 50 && far_open > 200,
+        "{dark} shadowed ({edge_beyond_bottom_face} beyond the bottom face) and {open} open \
+         ({far_open} in the side faces) floor pixels checked"
     );
 }
 

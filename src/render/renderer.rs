@@ -253,7 +253,7 @@ impl Renderer {
             .filter(|m| req.settings.shadows && m.built_for != Some(to_light))
         {
             let view = shadow_view(&sg.scene, to_light);
-            let spots = super::lights::shadowed_spots(&sg.scene);
+            let tiles = super::lights::shadow_tiles(&sg.scene);
             let e = enc.get_or_insert_with(encoder);
             map.build(
                 &self.gpu.queue,
@@ -261,7 +261,7 @@ impl Renderer {
                 &mut self.pipelines,
                 &sg.mesh,
                 &view,
-                &spots,
+                &tiles,
                 to_light,
                 &mut self.timer,
             )?;

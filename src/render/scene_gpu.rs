@@ -13,7 +13,7 @@ pub struct SceneGpu {
     pub scene: Scene,
     pub mesh: MeshBuffers,
     pub photons: Option<PhotonMap>,
-    /// The key and spot lights' shadow maps (`shadow.depth`, `shadow.spots` in `resources`),
+    /// The key and punctual lights' shadow maps (`shadow.depth`, `shadow.atlas` in `resources`),
     /// when the plan has shadows.
     pub shadow: Option<ShadowMap>,
     /// `materials.scene` (every translucent material marked subsurface, for the G-buffer and
@@ -43,11 +43,12 @@ impl SceneGpu {
         // The shadow maps first: the photon pass tests its photons against the key light's.
         let mut maps = Resources::default();
         let shadow = if crate::scene::Plan::of(&scene, 1, 1).shadows {
-            Some(ShadowMap::new(device, pipelines)?)
+            let tiles = super::lights::shadow_tiles(&scene).len();
+            Some(ShadowMap::new(device, pipelines, tiles)?)
         } else {
             None
         };
-        for name in ["shadow.depth", "shadow.spots"] {
+        for name in ["shadow.depth", "shadow.atlas"] {
             let map = shadow
                 .as_ref()
                 .and_then(|m| m.resources.get_texture(name).map(|(t, _)| t.clone()));

@@ -71,37 +71,40 @@ fn shadows(scene: &Scene) -> (bool, String) {
             "off (a single flat surface cannot shadow itself)".into(),
         );
     }
-    let spots = scene
-        .file
-        .lights
-        .iter()
-        .filter(|l| matches!(l, super::LightSpec::Spot { .. }))
-        .count();
-    if scene.file.light.intensity <= 0.0 && spots == 0 {
+    let (mut spots, mut points) = (0, 0);
+    for l in &scene.file.lights {
+        match l {
+            super::LightSpec::Spot { .. } => spots += 1,
+            super::LightSpec::Point { .. } => points += 1,
+            super::LightSpec::Directional { .. } => {}
+        }
+    }
+    if scene.file.light.intensity <= 0.0 && spots + points == 0 {
         return (
             false,
-            "off (the key light is off and no spot light shines)".into(),
+            "off (the key light is off and no spot or point light shines)".into(),
         );
     }
-    let spot_text = match spots {
-        0 => String::new(),
-        n if n <= SHADOWED_SPOTS => {
-            format!(", and each of the {n} spot lights' (perspective, 512²)")
-        }
-        n => format!(
-            ", and the first {SHADOWED_SPOTS} of the {n} spot lights' (perspective, 512²; the rest unshadowed)"
+    let tiles = spots + 6 * points;
+    let punctual = match (spots, points) {
+        (0, 0) => String::new(),
+        _ if tiles <= SHADOW_TILES => format!(
+            ", each spot light's (a 512² perspective tile: {spots}) and point light's (a cube of six: {points})"
+        ),
+        _ => format!(
+            ", and the spot lights' (one 512² tile each) and point lights' (six each) in scene order while {SHADOW_TILES} tiles last: {spots} spot and {points} point lights need {tiles}, the rest are unshadowed"
         ),
     };
     (
         true,
         format!(
-            "on: the key light's shadow map{spot_text}; 3×3 tent PCF, normal-offset and depth bias"
+            "on: the key light's shadow map{punctual}; 3×3 tent PCF, normal-offset and depth bias"
         ),
     )
 }
 
-/// Spot lights that get a shadow map (the renderer's atlas has this many tiles).
-pub const SHADOWED_SPOTS: usize = 4;
+/// Tiles in the punctual lights' shadow atlas: a spot light takes one, a point light six.
+pub const SHADOW_TILES: usize = 16;
 
 /// Auto mode turns radiosity on when at least this share of directions from the scene's centre
 /// meets a surface: a box open on one side (a Cornell box) is ~5/6, a bunny on a floor ~1/2.
@@ -289,7 +292,7 @@ impl fmt::Display for Plan {
         if d + p + s == 0 {
             writeln!(f, "  extra lights: none (the key light alone)")?;
         } else {
-            writeln!(f, "  extra lights: {d} directional, {p} point, {s} spot: diffuse + specular; spots shadowed (see shadows), the others not; translucency's photons come from the key light only")?;
+            writeln!(f, "  extra lights: {d} directional, {p} point, {s} spot: diffuse + specular; spot and point lights shadowed while the atlas has room (see shadows), directional ones not; translucency's photons come from the key light only")?;
         }
         writeln!(f, "  radiosity: {}", self.radiosity_reason)
     }

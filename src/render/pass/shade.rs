@@ -24,7 +24,7 @@ pub const PASS: PassDecl = PassDecl {
         texture("gbuffer.irradiance"),
         texture("shadow.depth"),
         read("lights.scene"),
-        texture("shadow.spots"),
+        texture("shadow.atlas"),
     ],
     attachments: &[],
     entry_points: &["shade_list", "shade_grid"],

@@ -1,6 +1,7 @@
 //! Shadow maps: the key light's (the whole scene rendered from the light, orthographically over
-//! the scene's bounding sphere) and up to `SPOTS` spot lights' (perspective, in the tiles of one
-//! atlas, storing the distance to the light). The shading passes test against them with a
+//! the scene's bounding sphere) and the punctual lights' (perspective, in the tiles of one atlas,
+//! storing the distance to the light: one tile for a spot light, six for a point light's cube;
+//! `render::lights` says which lights get them). The shading passes test against them with a
 //! tent-filtered 3×3 PCF (`shadow_factor` and `spot_shadow` in `shaders/common.wgsl`). Like the
 //! photon map they depend on geometry and lights only, so they are rendered once per key-light
 //! direction.
@@ -20,10 +21,13 @@ pub const SIDE: u32 = 1024;
 const DEPTH_BIAS_TEXELS: f32 = 1.5;
 /// Normal offset in texels: the lookup moves this far off the surface along its normal.
 const NORMAL_OFFSET_TEXELS: f32 = 1.0;
-/// Spot lights with a shadow map (the first ones of the scene's `lights`); more are unshadowed.
-pub const SPOTS: usize = crate::scene::plan::SHADOWED_SPOTS;
-/// Side of one spot light's tile; the atlas is 2×2 tiles.
-pub const SPOT_TILE: u32 = 512;
+/// Tiles in the punctual lights' atlas (a spot takes one, a point light six): lights that do not
+/// fit are unshadowed.
+pub const ATLAS_TILES: usize = crate::scene::plan::SHADOW_TILES;
+/// Side of one tile. 512 keeps a 90° cube face at ~0.3% of the distance per texel.
+pub const TILE: u32 = 512;
+/// Tiles per atlas row at most (16 tiles: a 2048² atlas).
+const COLUMNS: usize = 4;
 /// What an empty texel holds: farther than anything (the key map stores depth in 0..1, spot
 /// tiles distances, so one clear value serves both).
 const FAR: f64 = 1e30;
@@ -33,12 +37,12 @@ pub const PASS: PassDecl = PassDecl {
     shader: include_str!("../../../shaders/shadow.wgsl"),
     first_binding: 1,
     bindings: &[uniform("shadow.uniform")],
-    attachments: &["shadow.depth", "shadow.z", "shadow.spots", "shadow.spots_z"],
+    attachments: &["shadow.depth", "shadow.z", "shadow.atlas", "shadow.atlas_z"],
     entry_points: &["vs_main", "fs_main"],
 };
 
 /// One scene's shadow maps: their textures (bound by the shading passes as `shadow.depth` and
-/// `shadow.spots`) and what they were rendered for.
+/// `shadow.atlas`) and what they were rendered for.
 pub struct ShadowMap {
     pub resources: Resources,
     /// One uniform buffer and bind group per view: the key light, then each spot tile.
@@ -51,7 +55,7 @@ pub struct ShadowMap {
 #[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
 struct ShadowUniform {
     light_view_proj: [[f32; 4]; 4],
-    /// xyz: the light's position; w: 1 to store the distance to it (spots), 0 for depth.
+    /// xyz: the light's position; w: 1 to store the distance to it (punctual lights), 0 for depth.
     light_pos: [f32; 4],
 }
 
@@ -106,11 +110,19 @@ fn pipeline(
 }
 
 impl ShadowMap {
-    pub fn new(device: &wgpu::Device, pipelines: &mut Pipelines) -> Result<ShadowMap, GraphError> {
+    /// Maps for the key light and `tiles` punctual-light tiles (the atlas sized to hold them).
+    pub fn new(
+        device: &wgpu::Device,
+        pipelines: &mut Pipelines,
+        tiles: usize,
+    ) -> Result<ShadowMap, GraphError> {
         let mut r = Resources::default();
         let usage = wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::TEXTURE_BINDING;
         let depth = wgpu::TextureUsages::RENDER_ATTACHMENT;
-        let atlas = (2 * SPOT_TILE, 2 * SPOT_TILE);
+        let tiles = tiles.min(ATLAS_TILES);
+        let columns = atlas_columns(tiles);
+        let rows = tiles.div_ceil(columns).max(1);
+        let atlas = (columns as u32 * TILE, rows as u32 * TILE);
         for (name, size, format, usage) in [
             (
                 "shadow.depth",
@@ -124,9 +136,9 @@ impl ShadowMap {
                 wgpu::TextureFormat::Depth32Float,
                 depth,
             ),
-            ("shadow.spots", atlas, wgpu::TextureFormat::R32Float, usage),
+            ("shadow.atlas", atlas, wgpu::TextureFormat::R32Float, usage),
             (
-                "shadow.spots_z",
+                "shadow.atlas_z",
                 atlas,
                 wgpu::TextureFormat::Depth32Float,
                 depth,
@@ -136,7 +148,7 @@ impl ShadowMap {
         }
         let layout = pipelines.layout(&PASS);
         let mut views = Vec::new();
-        for _ in 0..=SPOTS {
+        for _ in 0..=tiles {
             let buffer = device.create_buffer(&wgpu::BufferDescriptor {
                 label: Some("shadow.uniform"),
                 size: std::mem::size_of::<ShadowUniform>() as u64,
@@ -157,8 +169,8 @@ impl ShadowMap {
         })
     }
 
-    /// Renders the key light's map for `view` (built for `to_light`) and the spot lights'
-    /// tiles (`spots`: view-projection and position of each, in tile order).
+    /// Renders the key light's map for `view` (built for `to_light`) and the punctual lights'
+    /// tiles (`tiles`: view-projection and the light's position, in atlas order).
     #[allow(clippy::too_many_arguments)]
     pub fn build(
         &mut self,
@@ -167,7 +179,7 @@ impl ShadowMap {
         pipelines: &mut Pipelines,
         mesh: &MeshBuffers,
         view: &ShadowView,
-        spots: &[(Mat4, Vec3)],
+        tiles: &[(Mat4, Vec3)],
         to_light: Vec3,
         timer: &mut PassTimer,
     ) -> Result<(), GraphError> {
@@ -192,17 +204,18 @@ impl ShadowMap {
             let mut pass = begin(encoder, &colour, &depth, timer.render(PASS.label));
             super::gbuffer::draw_mesh(&mut pass, &pipeline, &self.views[0].1, mesh);
         }
-        let (colour, depth) = (target("shadow.spots")?, target("shadow.spots_z")?);
+        let (colour, depth) = (target("shadow.atlas")?, target("shadow.atlas_z")?);
         let mut pass = begin(encoder, &colour, &depth, None);
-        for (i, (view_proj, position)) in spots.iter().take(SPOTS).enumerate() {
+        let columns = atlas_columns(tiles.len());
+        for (i, (view_proj, position)) in tiles.iter().take(self.views.len() - 1).enumerate() {
             let u = ShadowUniform {
                 light_view_proj: view_proj.to_cols_array_2d(),
                 light_pos: position.extend(1.0).to_array(),
             };
             queue.write_buffer(&self.views[i + 1].0, 0, bytemuck::bytes_of(&u));
-            let (x, y) = spot_tile(i);
-            let tile = SPOT_TILE as f32;
-            pass.set_viewport(x as f32, y as f32, tile, tile, 0.0, 1.0);
+            let (x, y) = tile_origin(i, columns);
+            let side = TILE as f32;
+            pass.set_viewport(x as f32, y as f32, side, side, 0.0, 1.0);
             super::gbuffer::draw_mesh(&mut pass, &pipeline, &self.views[i + 1].1, mesh);
         }
         drop(pass);
@@ -211,9 +224,15 @@ impl ShadowMap {
     }
 }
 
-/// Top-left texel of spot tile `i` in the atlas.
-pub fn spot_tile(i: usize) -> (u32, u32) {
-    ((i as u32 % 2) * SPOT_TILE, (i as u32 / 2) * SPOT_TILE)
+/// Tiles per row of an atlas holding `tiles` (at least one, so an empty atlas is one tile).
+pub fn atlas_columns(tiles: usize) -> usize {
+    tiles.clamp(1, COLUMNS)
+}
+
+/// Top-left texel of tile `i` in an atlas `columns` tiles wide.
+fn tile_origin(i: usize, columns: usize) -> (u32, u32) {
+    let (x, y) = (i % columns, i / columns);
+    (x as u32 * TILE, y as u32 * TILE)
 }
 
 /// A render pass that clears `colour` to `FAR` and `depth` to 1.
