@@ -373,8 +373,8 @@ struct VertexIn {
     // Linear RGBA multiplying the base colour (glTF vertex colours and textures; white
     // elsewhere).
     @location(6) tint: vec4<f32>,
-    // Texture coordinates of the material's base colour and normal maps.
-    @location(7) uv: vec2<f32>,
+    // Texture coordinates: xy the material's base colour map, zw its normal and occlusion maps.
+    @location(7) uv: vec4<f32>,
     // Tangent (xyz) and bitangent sign (w) for the normal map; zero without one.
     @location(8) tangent: vec4<f32>,
 }

@@ -16,7 +16,7 @@ struct VertexOut {
     @location(3) @interpolate(flat) material: u32,
     @location(4) irradiance: vec3<f32>,
     @location(5) tint: vec3<f32>,
-    @location(6) uv: vec2<f32>,
+    @location(6) uv: vec4<f32>,
     @location(7) tangent: vec4<f32>,
 }
 
@@ -59,9 +59,9 @@ fn fs_main(in: VertexOut, @builtin(front_facing) front: bool) -> GBuffer {
     let m = materials[in.material];
     // Sampled before anything branches, so the mip level's derivatives are defined.
     let layer = m.surface.w;
-    let texel = textureSample(material_textures, material_sampler, in.uv, i32(max(layer, 0.0)));
-    let bump = textureSample(linear_maps, material_sampler, in.uv, i32(max(m.maps.x, 0.0)));
-    let occluded = textureSample(linear_maps, material_sampler, in.uv, i32(max(m.maps.z, 0.0))).r;
+    let texel = textureSample(material_textures, material_sampler, in.uv.xy, i32(max(layer, 0.0)));
+    let bump = textureSample(linear_maps, material_sampler, in.uv.zw, i32(max(m.maps.x, 0.0)));
+    let occluded = textureSample(linear_maps, material_sampler, in.uv.zw, i32(max(m.maps.z, 0.0))).r;
     if (!front && m.double_sided == 0u) {
         discard;
     }

@@ -31,14 +31,15 @@ fn png_row(colours: &[[u8; 3]]) -> Vec<u8> {
     out
 }
 
-/// A glTF of one quad (corners counter-clockwise from the front, UVs (0,1) (1,1) (1,0) (0,0))
-/// whose material `material` may use texture 0, the image `row`; loaded as scene `name`.
+/// A glTF of one quad (corners counter-clockwise from the front, TEXCOORD_0 (0,1) (1,1) (1,0)
+/// (0,0), TEXCOORD_1 the same mirrored in u) whose material `material` may use texture 0, the
+/// image `row`; loaded as scene `name`.
 fn quad(name: &str, corners: [[f32; 3]; 4], material: serde_json::Value, row: &[[u8; 3]]) -> Scene {
     let mut bin = Vec::new();
     for c in corners.iter().flatten() {
         bin.extend_from_slice(&c.to_le_bytes());
     }
-    for c in [0f32, 1.0, 1.0, 1.0, 1.0, 0.0, 0.0, 0.0] {
+    for c in [0f32, 1.0, 1.0, 1.0, 1.0, 0.0, 0.0, 0.0, 1.0, 1.0, 0.0, 1.0, 0.0, 0.0, 1.0, 0.0] {
         bin.extend_from_slice(&c.to_le_bytes());
     }
     for i in [0u32, 1, 2, 0, 2, 3] {
@@ -59,19 +60,21 @@ fn quad(name: &str, corners: [[f32; 3]; 4], material: serde_json::Value, row: &[
         "bufferViews": [
             {"buffer": 0, "byteOffset": 0, "byteLength": 48},
             {"buffer": 0, "byteOffset": 48, "byteLength": 32},
-            {"buffer": 0, "byteOffset": 80, "byteLength": 24},
-            {"buffer": 0, "byteOffset": image_at, "byteLength": image.len()}
+            {"buffer": 0, "byteOffset": 112, "byteLength": 24},
+            {"buffer": 0, "byteOffset": image_at, "byteLength": image.len()},
+            {"buffer": 0, "byteOffset": 80, "byteLength": 32}
         ],
         "accessors": [
             {"bufferView": 0, "componentType": 5126, "count": 4, "type": "VEC3", "min": lo, "max": hi},
             {"bufferView": 1, "componentType": 5126, "count": 4, "type": "VEC2"},
-            {"bufferView": 2, "componentType": 5125, "count": 6, "type": "SCALAR"}
+            {"bufferView": 2, "componentType": 5125, "count": 6, "type": "SCALAR"},
+            {"bufferView": 4, "componentType": 5126, "count": 4, "type": "VEC2"}
         ],
         "images": [{"bufferView": 3, "mimeType": "image/png"}],
         "samplers": [{}],
         "textures": [{"source": 0, "sampler": 0}],
         "materials": [material],
-        "meshes": [{"primitives": [{"attributes": {"POSITION": 0, "TEXCOORD_0": 1}, "indices": 2, "material": 0}]}],
+        "meshes": [{"primitives": [{"attributes": {"POSITION": 0, "TEXCOORD_0": 1, "TEXCOORD_1": 3}, "indices": 2, "material": 0}]}],
         "nodes": [{"mesh": 0}],
         "scenes": [{"nodes": [0]}],
         "scene": 0
@@ -85,24 +88,8 @@ fn quad(name: &str, corners: [[f32; 3]; 4], material: serde_json::Value, row: &[
     scene
 }
 
-#[test]
-fn a_base_colour_texture_is_sampled_per_pixel() {
-    // A quad facing +Z, u along x; 8 red texels then 8 blue (filtering blends only the edges).
-    let row: Vec<[u8; 3]> = (0..16)
-        .map(|i| if i < 8 { [255, 0, 0] } else { [0, 0, 255] })
-        .collect();
-    let material = json!({"pbrMetallicRoughness": {"baseColorTexture": {"index": 0}, "metallicFactor": 0.0, "roughnessFactor": 1.0}});
-    let corners = [
-        [-1.0, -1.0, 0.0],
-        [1.0, -1.0, 0.0],
-        [1.0, 1.0, 0.0],
-        [-1.0, 1.0, 0.0],
-    ];
-    let scene = quad("tile", corners, material, &row);
-    assert_eq!(scene.textures.len(), 1);
-    let (w, h) = (80, 60);
-    let img = render(scene, w, h);
-    // Mean red and blue over the left and right thirds of what the quad covers.
+/// Summed (red, blue) over the left and right thirds of what the quad covers.
+fn red_and_blue_by_side(img: Inspection, w: u32) -> [[f32; 2]; 2] {
     let xs: Vec<u32> = (0..img.normal_distance.len())
         .filter(|&k| img.normal_distance[k][3] > 0.0)
         .map(|k| k as u32 % w)
@@ -124,11 +111,77 @@ fn a_base_colour_texture_is_sampled_per_pixel() {
             sums[side][1] += img.color[k][2];
         }
     }
+    sums
+}
+
+/// 8 red texels then 8 blue (filtering blends only the edges).
+fn red_then_blue() -> Vec<[u8; 3]> {
+    (0..16)
+        .map(|i| if i < 8 { [255, 0, 0] } else { [0, 0, 255] })
+        .collect()
+}
+
+/// A quad facing +Z, u along x.
+const FACING_Z: [[f32; 3]; 4] = [
+    [-1.0, -1.0, 0.0],
+    [1.0, -1.0, 0.0],
+    [1.0, 1.0, 0.0],
+    [-1.0, 1.0, 0.0],
+];
+
+#[test]
+fn a_base_colour_texture_is_sampled_per_pixel() {
+    let material = json!({"pbrMetallicRoughness": {"baseColorTexture": {"index": 0}, "metallicFactor": 0.0, "roughnessFactor": 1.0}});
+    let scene = quad("tile", FACING_Z, material, &red_then_blue());
+    assert_eq!(scene.textures.len(), 1);
+    let sums = red_and_blue_by_side(render(scene, 80, 60), 80);
     let [[left_r, left_b], [right_r, right_b]] = sums;
     // White is added evenly by the specular lobe and the ambient sky; the texture decides
     // which way each side leans.
     assert!(left_r > 1.3 * left_b, "left third is red: {sums:?}");
     assert!(right_b > 3.0 * right_r, "right third is blue: {sums:?}");
+}
+
+#[test]
+fn a_texture_transform_mirrors_the_base_colour_on_the_gpu() {
+    // u' = 1 − u: the red half of the image lands on the quad's right.
+    let material = json!({"pbrMetallicRoughness": {"baseColorTexture": {"index": 0,
+        "extensions": {"KHR_texture_transform": {"offset": [1, 0], "scale": [-1, 1]}}},
+        "metallicFactor": 0.0, "roughnessFactor": 1.0}});
+    let scene = quad("mirrored", FACING_Z, material, &red_then_blue());
+    let sums = red_and_blue_by_side(render(scene, 80, 60), 80);
+    let [[left_r, left_b], [right_r, right_b]] = sums;
+    assert!(left_b > 3.0 * left_r, "left third is blue: {sums:?}");
+    assert!(right_r > 1.3 * right_b, "right third is red: {sums:?}");
+}
+
+#[test]
+fn each_map_reads_its_own_coordinate_set_and_transform() {
+    // TEXCOORD_1 is TEXCOORD_0 mirrored in u. Base colour on set 1 scaled by 2; normal map on
+    // set 0 turned a quarter (u' = v, v' = 1 − u with the offset).
+    let material = json!({
+        "pbrMetallicRoughness": {"baseColorTexture": {"index": 0, "texCoord": 1,
+            "extensions": {"KHR_texture_transform": {"scale": [2, 2]}}}},
+        "normalTexture": {"index": 0,
+            "extensions": {"KHR_texture_transform": {"rotation": std::f64::consts::FRAC_PI_2, "offset": [0, 1]}}}
+    });
+    let scene = quad("two-sets", FACING_Z, material, &[[128, 128, 255]; 2]);
+    // Vertex 1 has TEXCOORD_0 (1, 1) and TEXCOORD_1 (0, 1).
+    let [bu, bv, du, dv] = scene.mesh.uv[1];
+    assert_eq!([bu, bv], [0.0, 2.0], "base colour: set 1 scaled");
+    assert!(
+        (du - 1.0).abs() < 1e-6 && (dv - 0.0).abs() < 1e-6,
+        "normal map: set 0 turned, {:?}",
+        [du, dv]
+    );
+    // The tangent follows the normal map's turned coordinates: u' grows with v, which runs
+    // down the quad (−y).
+    let t = scene.mesh.tangent[1];
+    assert!(t[1] < -0.999, "tangent along −y: {t:?}");
+    // A set the primitive lacks leaves the map without coordinates rather than failing.
+    let material = json!({"pbrMetallicRoughness": {"baseColorTexture": {"index": 0, "texCoord": 5}}});
+    let scene = quad("missing-set", FACING_Z, material, &red_then_blue());
+    assert!(scene.mesh.uv.iter().all(|uv| *uv == [0.0; 4]));
 }
 
 #[test]

@@ -13,8 +13,9 @@ pub struct Mesh {
     /// Linear RGBA multiplying the material's base colour per vertex (glTF vertex colours and
     /// base colour textures sampled at the vertices); white elsewhere.
     pub tint: Vec<[f32; 4]>,
-    /// Texture coordinates for the material's base colour and normal maps (zero without).
-    pub uv: Vec<[f32; 2]>,
+    /// Texture coordinates (zero without): xy for the material's base colour map, zw for its
+    /// normal and occlusion maps.
+    pub uv: Vec<[f32; 4]>,
     /// Tangent (xyz) and bitangent sign (w) for normal maps; zero where there is none.
     pub tangent: Vec<[f32; 4]>,
     pub indices: Vec<u32>,
@@ -50,7 +51,7 @@ impl Mesh {
             normals,
             material: vec![0; n],
             tint: vec![[1.0; 4]; n],
-            uv: vec![[0.0; 2]; n],
+            uv: vec![[0.0; 4]; n],
             tangent: vec![[0.0; 4]; n],
             indices,
         }

@@ -38,8 +38,8 @@ pub struct Vertex {
     material: u32,
     /// Linear RGBA base-colour tint, 8 bits per channel.
     tint: [u8; 4],
-    /// Base colour and normal map texture coordinates.
-    uv: [f32; 2],
+    /// Texture coordinates: xy base colour map, zw normal and occlusion maps.
+    uv: [f32; 4],
     /// Tangent and bitangent sign (normal maps).
     tangent: [f32; 4],
 }
@@ -48,7 +48,7 @@ pub struct Vertex {
 pub const VERTEX_LAYOUT: wgpu::VertexBufferLayout<'static> = wgpu::VertexBufferLayout {
     array_stride: std::mem::size_of::<Vertex>() as u64,
     step_mode: wgpu::VertexStepMode::Vertex,
-    attributes: &wgpu::vertex_attr_array![0 => Float32x3, 1 => Float32x3, 2 => Float32x3, 3 => Uint32, 6 => Unorm8x4, 7 => Float32x2, 8 => Float32x4],
+    attributes: &wgpu::vertex_attr_array![0 => Float32x3, 1 => Float32x3, 2 => Float32x3, 3 => Uint32, 6 => Unorm8x4, 7 => Float32x4, 8 => Float32x4],
 };
 
 /// A scene's mesh on the GPU.

@@ -17,6 +17,7 @@ use super::limits::{read_limited, MAX_TRIANGLES, MAX_VERTICES};
 use super::{Camera, LightSpec, MaterialSpec, RawMesh};
 use buffers::{load_buffers, read_uri};
 use primitive::read_primitive;
+use texture::UvMap;
 
 /// Required extensions Fovea reads (the crate's own list lacks diffuse transmission).
 const SUPPORTED: &[&str] = &[
@@ -26,6 +27,7 @@ const SUPPORTED: &[&str] = &[
     "KHR_materials_transmission",
     "KHR_materials_volume",
     "KHR_materials_diffuse_transmission",
+    "KHR_texture_transform",
 ];
 
 #[derive(Debug, thiserror::Error)]
@@ -56,8 +58,9 @@ pub struct Part {
     pub normals: Option<Vec<Vec3>>,
     /// Per-vertex linear RGBA multiplying the material's base colour (COLOR_0), if present.
     pub tint: Option<Vec<[f32; 4]>>,
-    /// Texture coordinates for the material's base colour and normal maps, if it has them.
-    pub uv: Option<Vec<[f32; 2]>>,
+    /// Texture coordinates, transformed, if the material has maps: xy for the base colour
+    /// map, zw for the normal and occlusion maps.
+    pub uv: Option<Vec<[f32; 4]>>,
     /// Tangents (xyz, w: bitangent sign), world space, where the material has a normal map.
     pub tangents: Option<Vec<[f32; 4]>>,
     /// Index into `Imported::materials`.
@@ -234,35 +237,42 @@ pub fn import_bytes(
         if let Some(mesh) = node.mesh() {
             for (pi, prim) in mesh.primitives().enumerate() {
                 let material = prim.material().index().unwrap_or(default_material);
-                // One set of texture coordinates per primitive: the base colour map's, else
-                // the normal map's (files that use two sets get a note).
+                // Two sets of texture coordinates per primitive: the base colour map's, and
+                // the normal map's (the occlusion map's when there is no normal map), each
+                // with its own set and KHR_texture_transform.
                 let pm = prim.material();
-                let base_set = pm
+                const TRANSFORM: &str = "KHR_texture_transform";
+                let mut notes = Vec::new();
+                let base = pm
                     .pbr_metallic_roughness()
                     .base_color_texture()
-                    .and_then(|t| textures.get(t.texture().index()).map(|_| t.tex_coord()));
-                let normal_set = pm
+                    .filter(|t| textures.get(t.texture().index()).is_some())
+                    .map(|t| UvMap::of(t.tex_coord(), t.extension_value(TRANSFORM), &mut notes));
+                let normal = pm
                     .normal_texture()
-                    .and_then(|t| textures.get(t.texture().index()).map(|_| t.tex_coord()))
-                    .or_else(|| {
-                        pm.occlusion_texture()
-                            .and_then(|t| textures.get(t.texture().index()).map(|_| t.tex_coord()))
-                    });
-                if let (Some(a), Some(b)) = (base_set, normal_set) {
-                    if a != b {
-                        imported.notes.push(format!(
-                            "mesh {:?}: the normal map's TEXCOORD_{b} is read as TEXCOORD_{a}",
-                            mesh.name().unwrap_or("")
+                    .filter(|t| textures.get(t.texture().index()).is_some())
+                    .map(|t| UvMap::of(t.tex_coord(), t.extension_value(TRANSFORM), &mut notes));
+                let occlusion = pm
+                    .occlusion_texture()
+                    .filter(|t| textures.get(t.texture().index()).is_some())
+                    .map(|t| UvMap::of(t.tex_coord(), t.extension_value(TRANSFORM), &mut notes));
+                if let (Some(n), Some(o)) = (normal, occlusion) {
+                    if n != o {
+                        notes.push(format!(
+                            "mesh {:?}: the occlusion map is read with the normal map's texture coordinates (TEXCOORD_{} and its transform)",
+                            mesh.name().unwrap_or(""),
+                            n.set
                         ));
                     }
                 }
-                let uv_set = base_set.or(normal_set);
+                imported.notes.extend(notes);
+                let detail = normal.or(occlusion);
                 match read_primitive(
                     &prim,
                     &buffers,
                     world,
-                    uv_set,
-                    normal_set.is_some(),
+                    [base, detail],
+                    normal.is_some(),
                     material,
                 ) {
                     Ok(Some(part)) => {

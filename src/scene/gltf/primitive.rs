@@ -1,10 +1,11 @@
 //! One glTF primitive as world-space triangles: its accessors checked (types, counts, index
 //! range, finite positions) before they are read, strips and fans triangulated, degenerate
-//! triangles dropped, vertex colours kept as a tint and texture coordinates for the base
-//! colour texture.
+//! triangles dropped, vertex colours kept as a tint, and texture coordinates for the base
+//! colour map and the normal/occlusion maps, each from its own set and transformed.
 
 use glam::{Mat3, Mat4, Vec3};
 
+use super::texture::UvMap;
 use super::Part;
 use crate::scene::limits::{MAX_TRIANGLES, MAX_VERTICES};
 use crate::scene::mesh::push_fan;
@@ -14,7 +15,7 @@ pub fn read_primitive(
     prim: &gltf::Primitive,
     buffers: &[Vec<u8>],
     world: Mat4,
-    uv_set: Option<u32>,
+    [base, detail]: [Option<UvMap>; 2],
     needs_tangents: bool,
     material: usize,
 ) -> Result<Option<Part>, String> {
@@ -35,7 +36,8 @@ pub fn read_primitive(
                 return Err(format!("{sem:?} accessor is empty"));
             }
             let float = a.data_type() == gltf::accessor::DataType::F32;
-            if a.dimensions() != dims || (!float && !matches!(sem, gltf::Semantic::Colors(_))) {
+            if a.dimensions() != dims || (!float
+                    && !matches!(sem, gltf::Semantic::Colors(_) | gltf::Semantic::TexCoords(_))) {
                 return Err(format!(
                     "{sem:?} is {:?} {:?}; Fovea reads float {dims:?} (dequantize the file)",
                     a.data_type(),
@@ -139,7 +141,7 @@ pub fn read_primitive(
         .read_colors(0)
         .map(|c| c.into_rgba_f32().collect::<Vec<_>>())
         .filter(|c| c.len() == count);
-    let uv: Option<Vec<[f32; 2]>> = uv_set.and_then(|set| {
+    let read_set = |set: u32| -> Option<Vec<[f32; 2]>> {
         let sem = gltf::Semantic::TexCoords(set);
         check(sem, gltf::accessor::Dimensions::Vec2)
             .ok()
@@ -156,7 +158,26 @@ pub fn read_primitive(
             })
             .collect();
         (uv.len() == count).then_some(uv)
-    });
+    };
+    // Each map's coordinates, transformed; a map without its set reads the other's.
+    let coords = |map: Option<UvMap>| -> Option<Vec<[f32; 2]>> {
+        let map = map?;
+        let raw = read_set(map.set)?;
+        Some(raw.into_iter().map(|t| map.apply(t)).collect())
+    };
+    let (base_uv, detail_uv) = (coords(base), coords(detail));
+    let uv: Option<Vec<[f32; 4]>> = match (&base_uv, &detail_uv) {
+        (None, None) => None,
+        (b, d) => {
+            let (b, d) = (b.as_ref().or(d.as_ref()), d.as_ref().or(b.as_ref()));
+            b.zip(d).map(|(b, d)| {
+                b.iter()
+                    .zip(d)
+                    .map(|(b, d)| [b[0], b[1], d[0], d[1]])
+                    .collect()
+            })
+        }
+    };
     let tint = colours.map(|c| {
         c.into_iter()
             .map(|v| v.map(|x| x.clamp(0.0, 1.0)))
@@ -177,7 +198,9 @@ pub fn read_primitive(
             _ => None,
         };
         given.or_else(|| {
-            uv.as_ref()
+            // From the normal map's own (transformed) coordinates.
+            detail_uv
+                .as_ref()
                 .map(|uv| crate::scene::mesh::tangents(&mesh.positions, uv, &mesh.indices))
         })
     } else {
