@@ -3,6 +3,7 @@
 
 pub mod foveated;
 pub mod h264;
+pub mod inset;
 
 use crate::protocol::Codec;
 

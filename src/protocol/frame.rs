@@ -58,9 +58,13 @@ pub struct FrameHeader {
     /// H.264 only: whether this frame is a keyframe (IDR) a decoder can start from.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub keyframe: Option<bool>,
-    /// The encoded image's size in bytes (what follows the header).
+    /// The encoded image's size in bytes (what follows the header; for an inset frame both
+    /// images together).
     #[serde(default)]
     pub bytes: usize,
+    /// Inset frames only: the bytes are a downscaled whole frame, then the inset.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub inset: Option<InsetHeader>,
     /// Fraction of pixels shaded this frame (1.0 without foveation).
     pub sampled: f64,
     /// Gaze samples the session had received when this frame was made (lost = sent − this).
@@ -74,6 +78,22 @@ pub struct FrameHeader {
     /// converges the frame shows the preview (unshot energy spread as an ambient term).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub radiosity: Option<SolveProgress>,
+}
+
+/// How an inset frame's two images fit together: the first `bytes − inset_bytes` bytes are the
+/// whole frame at `base_width`×`base_height`, to be scaled up to the frame's size; the rest is
+/// the inset, `width`×`height` pixels at (`x`, `y`) of the frame, drawn over it with its
+/// sides feathered over `feather` of its size (sides on the frame's edge are not feathered).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct InsetHeader {
+    pub x: u32,
+    pub y: u32,
+    pub width: u32,
+    pub height: u32,
+    pub base_width: u32,
+    pub base_height: u32,
+    pub inset_bytes: usize,
+    pub feather: f64,
 }
 
 /// Where a scene's radiosity solve stood when a frame used it (the wire's own type; the
@@ -145,6 +165,16 @@ mod tests {
             codec: Codec::Png,
             keyframe: None,
             bytes: 3,
+            inset: Some(InsetHeader {
+                x: 8,
+                y: 6,
+                width: 16,
+                height: 12,
+                base_width: 16,
+                base_height: 12,
+                inset_bytes: 1,
+                feather: 0.125,
+            }),
             sampled: 1.0,
             samples: 17,
             stages_ms: StageTimes {

@@ -35,6 +35,11 @@ pub struct Hello {
     /// Low-pass the periphery to what the eye resolves there before encoding (any codec).
     #[serde(default, skip_serializing_if = "std::ops::Not::not")]
     pub foveated_encoding: bool,
+    /// Inset encoding (JPEG and PNG): each frame is a downscaled whole frame plus a
+    /// full-resolution square this many degrees wide around the gaze (4–90), which the client
+    /// composes (docs/protocol.md, "Inset frames").
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub inset_deg: Option<f64>,
     /// Frames the server may have sent that the client has not acknowledged yet.
     #[serde(default = "default_in_flight")]
     pub max_in_flight: u32,
@@ -54,6 +59,7 @@ impl Default for Hello {
             bitrate_kbps: None,
             keyframe_s: None,
             foveated_encoding: false,
+            inset_deg: None,
             max_in_flight: default_in_flight(),
         }
     }

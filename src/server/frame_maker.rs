@@ -9,9 +9,11 @@ use super::pacing::Ticket;
 use super::timing::FrameTimes;
 use crate::encode;
 use crate::encode::foveated::{self, LowPass};
+use crate::encode::inset;
 use crate::encode::h264::H264Stream;
 use crate::protocol::{
-    encode_frame, Codec, ErrorCode, FrameHeader, GazeUsed, ProtocolError, SolveProgress,
+    encode_frame, Codec, ErrorCode, FrameHeader, GazeUsed, InsetHeader, ProtocolError,
+    SolveProgress,
 };
 use crate::render::{FrameRequest, RenderHandle};
 use crate::viewing::Viewing;
@@ -29,6 +31,8 @@ pub struct FrameJob {
     pub h264: Option<Arc<Mutex<H264Stream>>>,
     /// Foveated encoding: the low-pass and the viewing geometry it is judged in.
     pub low_pass: Option<(LowPass, Viewing)>,
+    /// Inset encoding: the inset's width in degrees and the viewing geometry.
+    pub inset: Option<(f64, Viewing)>,
 }
 
 /// A frame ready for the socket.
@@ -69,31 +73,34 @@ pub async fn make(render: RenderHandle, job: FrameJob) -> Result<MadeFrame, Fram
     );
     let (codec, quality, w, h) = (job.codec, job.quality, frame.width, frame.height);
     let stream = job.h264.clone();
-    let (low_pass, gaze) = (job.low_pass, job.request.gaze);
+    let (low_pass, inset, gaze) = (job.low_pass, job.inset, job.request.gaze);
     let rgba = frame.rgba;
     let encoded = tokio::task::spawn_blocking(move || {
         let _span = tracing::debug_span!("encode", frame = frame_no).entered();
         let start = Instant::now();
+        let g = [f64::from(gaze[0]), f64::from(gaze[1])];
         let rgba = match low_pass {
-            Some((p, viewing)) => {
-                let g = [f64::from(gaze[0]), f64::from(gaze[1])];
-                foveated::low_pass(&rgba, w, h, g, &viewing, &p)
-            }
+            Some((p, viewing)) => foveated::low_pass(&rgba, w, h, g, &viewing, &p),
             None => rgba,
         };
-        let out = match (codec, stream) {
-            (Codec::H264, Some(stream)) => stream
+        let out = match (codec, stream, inset) {
+            (Codec::H264, Some(stream), _) => stream
                 .lock()
                 .map_err(|_| encode::EncodeError::H264("the stream's lock was poisoned".into()))
                 .and_then(|mut s| s.encode(&rgba, w, h))
-                .map(|f| (f.bytes, Some(f.keyframe))),
-            _ => encode::encode(&rgba, w, h, codec, quality).map(|b| (b, None)),
+                .map(|f| (f.bytes, Some(f.keyframe), None)),
+            (_, _, Some((deg, viewing))) => {
+                encode_inset(&rgba, w, h, g, &viewing, deg, codec, quality)
+                    .map(|(b, i)| (b, None, Some(i)))
+            }
+            _ => encode::encode(&rgba, w, h, codec, quality).map(|b| (b, None, None)),
         };
-        out.map(|(bytes, key)| (bytes, key, start, Instant::now()))
+        out.map(|(bytes, key, inset)| (bytes, key, inset, start, Instant::now()))
     })
     .await
     .map_err(|e| failed("encoder task", &e))?;
-    let (image, keyframe, encode_start, encode_end) = encoded.map_err(|e| failed("encode", &e))?;
+    let (image, keyframe, inset, encode_start, encode_end) =
+        encoded.map_err(|e| failed("encode", &e))?;
     ::metrics::counter!("fovea_frame_bytes_total").increment(image.len() as u64);
     times.encode_start = encode_start;
     times.encode_end = encode_end;
@@ -114,6 +121,7 @@ pub async fn make(render: RenderHandle, job: FrameJob) -> Result<MadeFrame, Fram
         codec,
         keyframe,
         bytes: image.len(),
+        inset,
         sampled: frame.sampled,
         samples: t.samples,
         stages_ms: times.stages(),
@@ -129,6 +137,37 @@ pub async fn make(render: RenderHandle, job: FrameJob) -> Result<MadeFrame, Fram
         bytes: encode_frame(&header, &image),
         times,
     })
+}
+
+/// An inset frame's bytes (the downscaled whole frame, then the inset) and their header.
+#[allow(clippy::too_many_arguments)]
+fn encode_inset(
+    rgba: &[u8],
+    w: u32,
+    h: u32,
+    gaze: [f64; 2],
+    viewing: &Viewing,
+    inset_deg: f64,
+    codec: Codec,
+    quality: u8,
+) -> Result<(Vec<u8>, InsetHeader), encode::EncodeError> {
+    let plan = inset::plan(w, h, gaze, viewing, inset_deg, &LowPass::default());
+    let (base, crop) = inset::split(rgba, w, h, &plan);
+    let (bw, bh) = plan.base_size(w, h);
+    let mut bytes = encode::encode(&base, bw, bh, codec, quality)?;
+    let inset_bytes = encode::encode(&crop, plan.width, plan.height, codec, quality)?;
+    let header = InsetHeader {
+        x: plan.x,
+        y: plan.y,
+        width: plan.width,
+        height: plan.height,
+        base_width: bw,
+        base_height: bh,
+        inset_bytes: inset_bytes.len(),
+        feather: inset::FEATHER,
+    };
+    bytes.extend_from_slice(&inset_bytes);
+    Ok((bytes, header))
 }
 
 /// Whether `message` is the first failure of its kind (the message up to its first colon) the

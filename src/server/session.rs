@@ -418,6 +418,10 @@ impl Session {
                 let viewing = Viewing::new(hello.display, hello.width, hello.height);
                 (LowPass::default(), viewing)
             }),
+            inset: hello.inset_deg.map(|deg| {
+                let viewing = Viewing::new(hello.display, hello.width, hello.height);
+                (deg, viewing)
+            }),
         })
     }
 
