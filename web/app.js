@@ -4,6 +4,7 @@
 // a lost connection is retried with backoff, and a full server is retried too.
 
 import { H264Player, h264Supported } from './h264.js';
+import { composeInset } from './inset.js';
 import { Stats, overlayText, sparkline } from './overlay.js';
 import { SyntheticEye } from './synthetic-eye.js';
 import { bindControls, controls, drawFovea, showBanner, hideBanner, setStatus } from './ui.js';
@@ -13,6 +14,8 @@ const ctx = canvas.getContext('2d');
 
 const BACKOFF_MS = [1000, 2000, 4000, 8000, 10000];
 const SLOW_FRAME_MS = 500;
+// The inset's width, degrees, when the encoding menu asks for one.
+const INSET_DEG = 20;
 
 // Exposed for people poking in the console and for the browser tests.
 const state = {
@@ -28,6 +31,7 @@ const state = {
   pending: null,      // decoded frame waiting for the next animation frame
   player: null,       // the H.264 decoder of an h264 session
   codecNote: null,    // why the page shows another codec than the one chosen
+  lastImage: null,    // an inset frame's image bytes (both images), for the browser tests
   drawScheduled: false,
   stats: new Stats(),
   errors: [],
@@ -86,7 +90,7 @@ export function connect() {
     if (state.ws !== ws) return;
     send({
       type: 'hello', v: 1, scene: controls.scene.value, width, height, preset: controls.preset.value,
-      codec, quality: 85, max_in_flight: 2,
+      codec, quality: 85, max_in_flight: 2, ...encodingFields(controls.encoding.value, codec),
     });
     sendSettings();
   };
@@ -113,6 +117,18 @@ async function chooseCodec(chosen, width, height) {
   state.codecNote = 'H.264 needs WebCodecs with H.264 decoding, which this browser lacks: showing JPEG';
   showBanner(state.codecNote, 'info', 6000);
   return 'jpeg';
+}
+
+// The hello's foveated-encoding fields for the page's encoding choice. An inset needs whole
+// images per frame (JPEG or PNG): with H.264 the page says so and sends plain frames.
+function encodingFields(choice, codec) {
+  if (choice === 'lowpass') return { foveated_encoding: true };
+  if (choice !== 'inset') return {};
+  if (codec === 'h264') {
+    showBanner('the inset needs JPEG or PNG frames: H.264 sends whole frames', 'info', 6000);
+    return {};
+  }
+  return { inset_deg: INSET_DEG };
 }
 
 function scheduleRetry(reason, full) {
@@ -192,20 +208,23 @@ async function onFrame(buffer) {
     return;
   }
   const type = header.codec === 'png' ? 'image/png' : 'image/jpeg';
+  const bytes = new Uint8Array(buffer, 4 + headerLen);
   let bitmap;
   try {
-    bitmap = await createImageBitmap(new Blob([new Uint8Array(buffer, 4 + headerLen)], { type }));
+    bitmap = header.inset ? await composeInset(header, bytes, type)
+      : await createImageBitmap(new Blob([bytes], { type }));
   } catch (e) {
     console.warn(`frame ${header.frame} did not decode`, e);
     ack(header.frame, true);
     return;
   }
-  present(header, bitmap);
+  // An inset frame's bytes stay with it, for the browser test that checks its composition.
+  present(header, bitmap, header.inset ? bytes : null);
 }
 
 // Draw only the newest frame; anything it overtakes is acknowledged as dropped so its
 // credit returns to the server at once. `bitmap`: an ImageBitmap or a VideoFrame.
-function present(header, bitmap) {
+function present(header, bitmap, image = null) {
   const newest = state.pending ? state.pending.header.frame : (state.lastHeader ? state.lastHeader.frame : 0);
   if (header.frame < newest) {
     bitmap.close();
@@ -218,7 +237,7 @@ function present(header, bitmap) {
     state.stats.dropped += 1;
     ack(state.pending.header.frame, true);
   }
-  state.pending = { header, bitmap };
+  state.pending = { header, bitmap, image };
   if (!state.drawScheduled) {
     state.drawScheduled = true;
     requestAnimationFrame(draw);
@@ -239,6 +258,7 @@ function draw() {
   const answersGaze = (frame.header.trigger ?? 'gaze') === 'gaze' && frame.header.t_ms != null;
   state.stats.frameShown(now, answersGaze ? now - frame.header.t_ms : NaN);
   state.lastHeader = frame.header;
+  state.lastImage = frame.image;
   state.framesShown += 1;
   state.totalFrames += 1;
   state.waitingSince = null;
@@ -314,9 +334,9 @@ setInterval(() => {
   if (!progress.hidden) document.getElementById('progress-text').textContent = `rendering… ${(waited / 1000).toFixed(1)} s`;
 }, 250);
 
-// ?scene=…&size=WxH&preset=…&codec=… preselect the controls, so a view can be shared as a link.
+// ?scene=…&size=WxH&preset=…&codec=…&encoding=… preselect the controls, so a view can be shared as a link.
 const params = new URLSearchParams(location.search);
-for (const name of ['scene', 'size', 'preset', 'codec']) {
+for (const name of ['scene', 'size', 'preset', 'codec', 'encoding']) {
   const v = params.get(name);
   if (v == null) continue;
   const sel = controls[name];

@@ -63,7 +63,7 @@ export function overlayText(stats, header, nowMs) {
     const s = header.stages_ms;
     lines.push(`server queue ${ms(s.queue)} render ${ms(s.render)}`);
     lines.push(`       readback ${ms(s.readback)} encode ${ms(s.encode)} ms`);
-    lines.push(`frame ${header.frame} (${header.trigger ?? 'gaze'})  ${header.width}×${header.height} ${header.codec}${header.keyframe ? ' (key)' : ''}`);
+    lines.push(`frame ${header.frame} (${header.trigger ?? 'gaze'})  ${header.width}×${header.height} ${header.codec}${header.keyframe ? ' (key)' : ''}${header.inset ? ` inset ${header.inset.width}×${header.inset.height} over ${header.inset.base_width}×${header.inset.base_height}` : ''}`);
     lines.push(`shaded ${(100 * header.sampled).toFixed(1)}%  gaze ${header.gaze.x.toFixed(3)}, ${header.gaze.y.toFixed(3)}`);
     const gi = header.radiosity;
     if (gi) {

@@ -4,7 +4,7 @@
 const $ = (id) => document.getElementById(id);
 
 export const controls = {
-  scene: $('scene'), size: $('size'), codec: $('codec'), preset: $('preset'),
+  scene: $('scene'), size: $('size'), codec: $('codec'), encoding: $('encoding'), preset: $('preset'),
   overlay: $('overlay-mode'), dof: $('dof'), pupil: $('pupil'), predict: $('predict'),
   auto: $('auto-gaze'), ring: $('fovea-ring'), reconstruction: $('reconstruction'),
   edges_at_mar: $('edges_at_mar'),
@@ -153,7 +153,7 @@ export function bindControls(app) {
   }
   controls.ring.addEventListener('change', () => drawFovea(window.fovea.lastHeader));
   controls.auto.addEventListener('change', () => app.setAutoGaze(controls.auto.checked));
-  for (const sel of [controls.scene, controls.size, controls.codec]) sel.addEventListener('change', app.connect);
+  for (const sel of [controls.scene, controls.size, controls.codec, controls.encoding]) sel.addEventListener('change', app.connect);
   $('knobs-button').addEventListener('click', () => toggle('knobs', 'knobs-button'));
   $('stats-button').addEventListener('click', () => toggle('stats', 'stats-button'));
   $('fit-button').addEventListener('click', toggleFit);

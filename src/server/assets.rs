@@ -22,6 +22,11 @@ const FILES: &[(&str, &str, &[u8])] = &[
         include_bytes!("../../web/h264.js"),
     ),
     (
+        "/inset.js",
+        "text/javascript; charset=utf-8",
+        include_bytes!("../../web/inset.js"),
+    ),
+    (
         "/ui.js",
         "text/javascript; charset=utf-8",
         include_bytes!("../../web/ui.js"),

@@ -7,6 +7,7 @@
 //! CHROMIUM names the browser (default: the first of chromium, chromium-browser,
 //! google-chrome on PATH). Without one the tests fail, naming the package to install.
 
+mod encoding;
 mod harness;
 
 use std::time::Duration;
