@@ -1,5 +1,6 @@
 //! Codec comparison along a recorded gaze path: bytes, encode time and quality of JPEG and
-//! H.264, each with and without foveated encoding, on the same rendered frames. Inter-frame
+//! H.264, each with and without foveated encoding (the low-pass; for JPEG also the 20° inset),
+//! on the same rendered frames. Inter-frame
 //! coding is measured on moving gaze, not on a still frame.
 //!
 //! `cargo run --release --example codecs -- [OUT] [WxH] [FRAMES] [SCENE]`
@@ -11,6 +12,7 @@ use std::time::Instant;
 
 use fovea::encode::foveated::{low_pass, LowPass};
 use fovea::encode::h264::{H264Config, H264Stream};
+use fovea::encode::{encode, inset};
 use fovea::gaze::formats::{parse, ParseOptions};
 use fovea::protocol::Codec;
 use fovea::quality::{flip_map, pixels_per_degree};
@@ -23,6 +25,8 @@ struct Config {
     h264_kbps: Option<u32>,
     jpeg_q: u8,
     foveated: bool,
+    /// Inset encoding (JPEG): the inset's width, degrees.
+    inset_deg: Option<f64>,
 }
 
 #[derive(Default)]
@@ -85,6 +89,21 @@ fn main() -> anyhow::Result<()> {
         req.gaze = [g[0] as f32, g[1] as f32];
         rendered.push((g, renderer.render(&req)?.rgba));
     }
+    // Mean FLIP within 5° of the gaze and over the whole frame.
+    let foveal_and_whole = |reference: &[u8], shown: &[u8], g: [f64; 2]| -> (f64, f64) {
+        let map = flip_map(reference, shown, w, h, ppd);
+        let gp = viewing.to_pixels(g);
+        let fov: Vec<f64> = map
+            .iter()
+            .enumerate()
+            .filter(|(i, _)| {
+                let at = [(*i as u32 % w) as f64, (*i as u32 / w) as f64];
+                viewing.eccentricity_deg(gp, at) <= 5.0
+            })
+            .map(|(_, e)| *e)
+            .collect();
+        (mean(&fov), mean(&map))
+    };
     let mut configs = Vec::new();
     for foveated in [false, true] {
         let tag = if foveated { " + foveated" } else { "" };
@@ -94,6 +113,7 @@ fn main() -> anyhow::Result<()> {
                 h264_kbps: None,
                 jpeg_q: q,
                 foveated,
+                inset_deg: None,
             });
         }
         for kbps in [1000u32, 2000, 4000, 8000] {
@@ -102,8 +122,18 @@ fn main() -> anyhow::Result<()> {
                 h264_kbps: Some(kbps),
                 jpeg_q: 0,
                 foveated,
+                inset_deg: None,
             });
         }
+    }
+    for q in [75u8, 85, 95] {
+        configs.push(Config {
+            name: format!("JPEG q{q} + inset 20°"),
+            h264_kbps: None,
+            jpeg_q: q,
+            foveated: false,
+            inset_deg: Some(20.0),
+        });
     }
     let p = LowPass::default();
     let mut table = String::from("| configuration | bytes/frame (median) | kbit/s at 60 fps | foveal FLIP (mean, ≤ 5°) | whole-frame FLIP (mean) | encode ms (median, incl. low-pass and colour conversion) |\n|---|---:|---:|---:|---:|---:|\n");
@@ -132,30 +162,34 @@ fn main() -> anyhow::Result<()> {
                     let yuv = decoder
                         .decode(&f.bytes)?
                         .ok_or_else(|| anyhow::anyhow!("no picture"))?;
-                    let mut back = vec![0; (w * h * 4) as usize];
-                    yuv.write_rgba8(&mut back);
-                    (f.bytes, back)
+                    // Rounded, as a browser's decoder shows it (openh264's own truncates).
+                    (f.bytes, fovea::encode::yuv::picture_to_rgba(&yuv))
                 }
-                None => {
-                    let b = fovea::encode::encode(&input, w, h, Codec::Jpeg, c.jpeg_q)?;
-                    t.encode_ms.push(start.elapsed().as_secs_f64() * 1e3);
-                    let back = image::load_from_memory(&b)?.to_rgba8().into_raw();
-                    (b, back)
-                }
+                None => match c.inset_deg {
+                    Some(deg) => {
+                        let plan = inset::plan(w, h, *g, &viewing, deg, &p);
+                        let (base, crop) = inset::split(&input, w, h, &plan);
+                        let (bw, bh) = plan.base_size(w, h);
+                        let jpeg = |px: &[u8], pw, ph| encode(px, pw, ph, Codec::Jpeg, c.jpeg_q);
+                        let (b, i) = (jpeg(&base, bw, bh)?, jpeg(&crop, plan.width, plan.height)?);
+                        t.encode_ms.push(start.elapsed().as_secs_f64() * 1e3);
+                        let back = |b: &[u8]| image::load_from_memory(b).map(|d| d.to_rgba8().into_raw());
+                        let shown = inset::compose(&back(&b)?, &back(&i)?, &plan, w, h);
+                        ([b, i].concat(), shown)
+                    }
+                    None => {
+                        let b = encode(&input, w, h, Codec::Jpeg, c.jpeg_q)?;
+                        t.encode_ms.push(start.elapsed().as_secs_f64() * 1e3);
+                        let back = image::load_from_memory(&b)?.to_rgba8().into_raw();
+                        (b, back)
+                    }
+                },
             };
             t.bytes.push(bytes.len());
             if k % 3 == 2 {
-                let map = flip_map(rgba, &decoded, w, h, ppd);
-                let gp = viewing.to_pixels(*g);
-                let mut fov = Vec::new();
-                for (i, e) in map.iter().enumerate() {
-                    let at = [(i as u32 % w) as f64, (i as u32 / w) as f64];
-                    if viewing.eccentricity_deg(gp, at) <= 5.0 {
-                        fov.push(*e);
-                    }
-                }
-                t.foveal.push(mean(&fov));
-                t.whole.push(mean(&map));
+                let (f, a) = foveal_and_whole(rgba, &decoded, *g);
+                t.foveal.push(f);
+                t.whole.push(a);
                 if k + 1 == frames - frames % 3 || k + 3 >= frames {
                     let name = c.name.replace([' ', '/', '+', '.'], "_");
                     image::save_buffer(
@@ -180,6 +214,29 @@ fn main() -> anyhow::Result<()> {
             mean(&t.whole),
             median(t.encode_ms.clone())
         );
+        eprint!("{row}");
+        table.push_str(&row);
+    }
+    // The floor under every codec that codes 8-bit 4:2:0 YCbCr: the colour conversion alone,
+    // rounded (ours) and truncated (openh264's), no compression.
+    for (name, ours) in [("I420 round trip, rounded (no codec)", true), ("I420 round trip, openh264's truncating conversion (no codec)", false)] {
+        let (mut fov, mut whole) = (Vec::new(), Vec::new());
+        for (g, rgba) in rendered.iter().skip(2).step_by(3) {
+            let back = if ours {
+                let mut pic = fovea::encode::yuv::I420::new(w as usize, h as usize);
+                pic.fill(rgba);
+                fovea::encode::yuv::picture_to_rgba(&pic)
+            } else {
+                let pic = openh264::formats::YUVBuffer::from_rgba8_source(
+                    openh264::formats::RgbaSliceU8::new(rgba, (w as usize, h as usize)),
+                );
+                fovea::encode::yuv::picture_to_rgba(&pic)
+            };
+            let (f, a) = foveal_and_whole(rgba, &back, *g);
+            fov.push(f);
+            whole.push(a);
+        }
+        let row = format!("| {name} | – | – | {:.4} | {:.4} | – |\n", mean(&fov), mean(&whole));
         eprint!("{row}");
         table.push_str(&row);
     }

@@ -3,7 +3,8 @@
 //! arrives), a keyframe at the start, on request, after a size change and every
 //! `keyframe_every`, constant bitrate.
 //!
-//! Frames are converted from RGBA with openh264's BT.601 limited-range conversion and the
+//! Frames are converted from RGBA by `encode::yuv` (BT.601 limited range, rounded; openh264's own
+//! converter truncates, which FLIP counts) and the
 //! stream's VUI says so, so decoders turn them back into the same colours. openh264 built
 //! from source (the default) is not covered by Cisco's patent licence; building with the
 //! `openh264-libloading` feature loads Cisco's binary instead (see README, "Licences").
@@ -11,10 +12,17 @@
 use std::time::{Duration, Instant};
 
 use openh264::encoder::{
-    BitRate, Encoder, EncoderConfig, FrameRate, FrameType, Profile, RateControlMode,
+    BitRate, Encoder, EncoderConfig, FrameRate, FrameType, Profile, QpRange, RateControlMode,
     SpsPpsStrategy, UsageType, VuiConfig,
 };
-use openh264::formats::{RgbaSliceU8, YUVBuffer, YUVSource};
+use openh264::formats::YUVSource;
+
+use super::yuv::I420;
+
+/// The quantiser's range (H.264: 0 finest … 51 coarsest). The bitrate target is met within it;
+/// past it, quality wins and the stream runs over the target.
+pub const MIN_QP: u8 = 10;
+pub const MAX_QP: u8 = 22;
 use openh264::{OpenH264API, Timestamp};
 
 use super::EncodeError;
@@ -67,7 +75,7 @@ pub struct H264Stream {
     /// The stream's clock: rate control spends bits by the time between frames.
     started: Instant,
     last_ms: u64,
-    yuv: Option<YUVBuffer>,
+    yuv: Option<I420>,
 }
 
 /// One encoded frame: Annex B NAL units.
@@ -129,6 +137,14 @@ impl H264Stream {
                 .profile(Profile::Baseline)
                 .sps_pps_strategy(SpsPpsStrategy::ConstantId)
                 .skip_frames(false)
+                // Quality over the bitrate target: with the quantiser free to reach 51 and
+                // openh264's background detection on, a still camera's P-frames came out
+                // 14 bytes long and never refined the keyframe (foveal FLIP 0.104 at
+                // 4000 kbit/s); QP ≤ 22 without background detection or adaptive quantisation
+                // reaches JPEG q85's foveal FLIP in ~5 kB P-frames (docs/encoding.md).
+                .qp(QpRange::new(MIN_QP, MAX_QP))
+                .background_detection(false)
+                .adaptive_quantization(false)
                 .num_threads(1)
                 .vui(VuiConfig::bt601());
             let encoder = Encoder::with_api_config(api()?, config)
@@ -179,9 +195,9 @@ impl H264Stream {
         // One YUV buffer per stream, refilled each frame (1.4 MB at 720p not reallocated).
         let yuv = match &mut self.yuv {
             Some(buffer) if buffer.dimensions() == (w, h) => buffer,
-            slot => slot.insert(YUVBuffer::new(w, h)),
+            slot => slot.insert(I420::new(w, h)),
         };
-        yuv.read_rgba8(RgbaSliceU8::new(rgba, (w, h)));
+        yuv.fill(rgba);
         self.ensure_encoder(width, height)?;
         let ask = self.keyframe_asked || due;
         let Some(encoder) = self.encoder.as_mut() else {
