@@ -86,6 +86,10 @@ pub struct EncodingArgs {
     /// Low-pass the periphery to what the eye resolves before encoding (any codec).
     #[arg(long)]
     pub foveated_encoding: bool,
+    /// Inset frames (jpeg, png): a downscaled whole frame plus a full-resolution square this
+    /// many degrees wide (4–90) around the gaze.
+    #[arg(long)]
+    pub inset_deg: Option<f64>,
 }
 
 impl EncodingArgs {
@@ -95,6 +99,7 @@ impl EncodingArgs {
             codec: self.codec,
             bitrate_kbps: self.bitrate_kbps,
             foveated_encoding: self.foveated_encoding,
+            inset_deg: self.inset_deg,
             ..Default::default()
         }
     }
