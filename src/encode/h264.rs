@@ -19,6 +19,12 @@ use openh264::formats::YUVSource;
 
 use super::yuv::I420;
 
+/// A frame as the renderer hands it over.
+enum Picture<'a> {
+    Rgba(&'a [u8]),
+    I420(&'a [u8]),
+}
+
 /// The quantiser's range (H.264: 0 finest … 51 coarsest). The bitrate target is met within it;
 /// past it, quality wins and the stream runs over the target.
 pub const MIN_QP: u8 = 10;
@@ -167,11 +173,33 @@ impl H264Stream {
         self.encode_at(rgba, width, height, ms)
     }
 
+    /// Encodes a frame already converted to I420 (Y, U, V planes, tight; the renderer's
+    /// `i420` readback), timed by the wall clock.
+    pub fn encode_i420(
+        &mut self,
+        planes: &[u8],
+        width: u32,
+        height: u32,
+    ) -> Result<H264Frame, EncodeError> {
+        let ms = self.started.elapsed().as_millis() as u64;
+        self.encode_picture(Picture::I420(planes), width, height, ms)
+    }
+
     /// Encodes a frame shown `ms` after the stream's first. Rate control spends the bitrate
     /// over the time between frames, so frames at one timestamp would get almost no bits.
     pub fn encode_at(
         &mut self,
         rgba: &[u8],
+        width: u32,
+        height: u32,
+        ms: u64,
+    ) -> Result<H264Frame, EncodeError> {
+        self.encode_picture(Picture::Rgba(rgba), width, height, ms)
+    }
+
+    fn encode_picture(
+        &mut self,
+        picture: Picture,
         width: u32,
         height: u32,
         ms: u64,
@@ -184,12 +212,16 @@ impl H264Stream {
             .last_keyframe
             .is_none_or(|t| now.duration_since(t) >= self.config.keyframe_every);
         let (w, h) = (width as usize, height as usize);
-        if rgba.len() != w * h * 4 {
+        let (len, expected) = match picture {
+            Picture::Rgba(p) => (p.len(), w * h * 4),
+            Picture::I420(p) => (p.len(), w * h * 3 / 2),
+        };
+        if len != expected {
             return Err(EncodeError::Size {
                 width,
                 height,
-                expected: w * h * 4,
-                got: rgba.len(),
+                expected,
+                got: len,
             });
         }
         // One YUV buffer per stream, refilled each frame (1.4 MB at 720p not reallocated).
@@ -197,7 +229,10 @@ impl H264Stream {
             Some(buffer) if buffer.dimensions() == (w, h) => buffer,
             slot => slot.insert(I420::new(w, h)),
         };
-        yuv.fill(rgba);
+        match picture {
+            Picture::Rgba(rgba) => yuv.fill(rgba),
+            Picture::I420(planes) => yuv.copy_from(planes),
+        }
         self.ensure_encoder(width, height)?;
         let ask = self.keyframe_asked || due;
         let Some(encoder) = self.encoder.as_mut() else {

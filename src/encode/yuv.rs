@@ -24,6 +24,11 @@ impl I420 {
         }
     }
 
+    /// Refills the picture from I420 planes of the same size (Y, U, V, tight).
+    pub fn copy_from(&mut self, planes: &[u8]) {
+        self.data.copy_from_slice(planes);
+    }
+
     /// Refills the picture from `rgba` of the same (even) size.
     pub fn fill(&mut self, rgba: &[u8]) {
         let (w, h) = (self.width, self.height);

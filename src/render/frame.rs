@@ -10,7 +10,7 @@
 use super::graph::{GraphError, PassDecl, Recorder};
 use super::pass::gbuffer::MeshBuffers;
 use super::pass::{
-    compact, dof, gbuffer, jfa, output, photons, pull_push, pyramid, resolve, sampling,
+    compact, dof, gbuffer, i420, jfa, output, photons, pull_push, pyramid, resolve, sampling,
     screen_diffusion, shade, shadow,
 };
 use super::request::MIN_XI;
@@ -19,7 +19,7 @@ use crate::settings::{Reconstruction, RenderSettings, Rung};
 
 /// Every pass the renderer has, in the order a frame meets them (shadow, photons and pyramid run
 /// once per static scene, before the frame that first needs them).
-pub const PASSES: [&PassDecl; 13] = [
+pub const PASSES: [&PassDecl; 14] = [
     &shadow::PASS,
     &photons::PASS,
     &pyramid::PASS,
@@ -33,6 +33,7 @@ pub const PASSES: [&PassDecl; 13] = [
     &pull_push::PASS,
     &dof::PASS,
     &output::PASS,
+    &i420::PASS,
 ];
 
 /// Which optional passes a frame runs.
@@ -48,6 +49,8 @@ pub struct FramePlan {
     pub pull_push: bool,
     /// Jump sizes of the JFA steps (foveated frames reconstructed from JFA).
     pub jfa_steps: Vec<u32>,
+    /// Convert the output to I420 planes for the readback (H.264 sessions, even sizes).
+    pub i420: bool,
 }
 
 impl FramePlan {
@@ -64,6 +67,7 @@ impl FramePlan {
             } else {
                 Vec::new()
             },
+            i420: false,
         }
     }
 }
@@ -115,6 +119,9 @@ pub fn record_suffix(f: &mut Recorder, plan: &FramePlan) -> Result<(), GraphErro
         dof::record(f)?;
     }
     output::record(f)?;
+    if plan.i420 {
+        i420::record(f)?;
+    }
     keep_history(f)
 }
 

@@ -37,6 +37,9 @@ pub struct FrameRequest {
     pub stream: u64,
     /// Seconds into the stream, for animated lights.
     pub time_s: f64,
+    /// Read the frame back as I420 planes (the GPU converts; width and height even) instead
+    /// of RGBA: what an H.264 session encodes.
+    pub i420: bool,
 }
 
 impl FrameRequest {
@@ -62,6 +65,7 @@ impl FrameRequest {
             camera: None,
             stream: 0,
             time_s: 0.0,
+            i420: false,
         }
     }
 }
@@ -71,8 +75,10 @@ impl FrameRequest {
 pub struct RenderedFrame {
     pub width: u32,
     pub height: u32,
-    /// Tightly packed RGBA8, sRGB-encoded, top row first.
+    /// Tightly packed RGBA8, sRGB-encoded, top row first (empty when `i420` holds the frame).
     pub rgba: Vec<u8>,
+    /// The frame as I420 planes (Y, U, V, tight), when the request asked for them.
+    pub i420: Option<Vec<u8>>,
     /// Fraction of the frame's pixels the shading pass ran for.
     pub sampled: f64,
     pub render_ms: f64,

@@ -205,7 +205,8 @@ impl Renderer {
             let buffer = t.buffer("frame.uniform")?;
             queue.write_buffer(buffer, offset, bytemuck::cast_slice(&[a, b]));
         }
-        let plan = FramePlan::of(&req.settings, req.width, req.height, t.needs_dipole);
+        let mut plan = FramePlan::of(&req.settings, req.width, req.height, t.needs_dipole);
+        plan.i420 = wants_i420(req);
         let scope = device.push_error_scope(wgpu::ErrorFilter::Validation);
         let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
             label: Some("frame"),
@@ -258,7 +259,12 @@ impl Renderer {
         let (w, h) = (f.req.width, f.req.height);
         let started = Instant::now();
         let t = &self.targets[ti].1;
-        let (rgba, count) = t.read_back(&self.gpu.device, &self.gpu.queue)?;
+        let (image, count) = t.read_back(&self.gpu.device, &self.gpu.queue, wants_i420(&f.req))?;
+        let (rgba, i420) = if wants_i420(&f.req) {
+            (Vec::new(), Some(super::pass::i420::unpad(&image, w, h)))
+        } else {
+            (image, None)
+        };
         let readback_ms = started.elapsed().as_secs_f64() * 1e3;
         let sampled = if f.req.settings.foveation.enabled {
             f64::from(count) / (f64::from(w) * f64::from(h))
@@ -269,6 +275,7 @@ impl Renderer {
             width: w,
             height: h,
             rgba,
+            i420,
             sampled,
             render_ms: f.render_ms,
             readback_ms,
@@ -297,4 +304,9 @@ mod tests {
             assert!(b.len() as u32 <= n.max(1));
         }
     }
+}
+
+/// Whether a frame is read back as I420: asked for, and of even size (4:2:0).
+fn wants_i420(req: &FrameRequest) -> bool {
+    req.i420 && req.width % 2 == 0 && req.height % 2 == 0
 }

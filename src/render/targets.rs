@@ -6,7 +6,7 @@
 use std::collections::HashMap;
 
 use super::graph::{BindKey, Resources, Routes};
-use super::pass::{gbuffer, jfa, pull_push};
+use super::pass::{gbuffer, i420, jfa, pull_push};
 use super::uniforms::FrameUniform;
 use super::RenderError;
 use crate::foveation::reconstruct::jfa_steps;
@@ -40,6 +40,8 @@ pub struct FrameTargets {
     /// Where the last frame's ports pointed (`jfa.nearest`, `frame.color`).
     pub routes: Routes,
     readback: wgpu::Buffer,
+    /// The I420 planes' readback (`output.i420`, 1.5 bytes a pixel plus padding).
+    i420_readback: wgpu::Buffer,
     counter_readback: wgpu::Buffer,
     /// Last frame's camera, and whether its buffers may be reused.
     pub prev_view_proj: glam::Mat4,
@@ -130,12 +132,18 @@ impl FrameTargets {
         ] {
             r.buffer(name, buffer(name, bytes, usage));
         }
+        let i420_bytes = i420::words(width, height).max(1) * 4;
+        r.buffer(
+            "output.i420",
+            buffer("output.i420", i420_bytes, B::STORAGE | B::COPY_SRC),
+        );
         r.buffer("materials.planned", planned_materials);
         FrameTargets {
             resources: r,
             binds: HashMap::new(),
             routes: Routes::default(),
             readback: buffer("output.readback", pixels * 4, B::COPY_DST | B::MAP_READ),
+            i420_readback: buffer("output.i420.readback", i420_bytes, B::COPY_DST | B::MAP_READ),
             counter_readback: buffer("compact.counter.readback", 16, B::COPY_DST | B::MAP_READ),
             prev_view_proj: glam::Mat4::IDENTITY,
             prev_eye: glam::Vec3::ZERO,
@@ -153,7 +161,9 @@ impl FrameTargets {
         let per_pixel: u64 = textures().iter().map(|t| texel(t.1)).sum::<u64>()
             + PER_PIXEL.iter().map(|p| p.1).sum::<u64>()
             + 4;
-        u64::from(width) * u64::from(height) * per_pixel + pull_push::cells_bytes(width, height)
+        u64::from(width) * u64::from(height) * per_pixel
+            + pull_push::cells_bytes(width, height)
+            + 2 * 4 * i420::words(width, height)
     }
 
     pub fn buffer(&self, name: &'static str) -> Result<&wgpu::Buffer, RenderError> {
@@ -169,21 +179,27 @@ impl FrameTargets {
             .ok_or_else(|| RenderError::Readback(format!("no texture named {name}")))
     }
 
-    /// Copies the final image and the sample count to host memory.
+    /// Copies the final image (RGBA, or with `i420` the I420 pass's padded planes) and the
+    /// sample count to host memory.
     pub fn read_back(
         &self,
         device: &wgpu::Device,
         queue: &wgpu::Queue,
+        i420: bool,
     ) -> Result<(Vec<u8>, u32), RenderError> {
         let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
             label: Some("readback"),
         });
-        let image = self.buffer("output.final")?;
-        encoder.copy_buffer_to_buffer(image, 0, &self.readback, 0, image.size());
+        let (image, readback) = if i420 {
+            (self.buffer("output.i420")?, &self.i420_readback)
+        } else {
+            (self.buffer("output.final")?, &self.readback)
+        };
+        encoder.copy_buffer_to_buffer(image, 0, readback, 0, image.size());
         let counter = self.buffer("compact.counter")?;
         encoder.copy_buffer_to_buffer(counter, 0, &self.counter_readback, 0, 16);
         let submission = queue.submit([encoder.finish()]);
-        let image = map_read(device, submission.clone(), &self.readback, |bytes| {
+        let image = map_read(device, submission.clone(), readback, |bytes| {
             bytes.to_vec()
         })?;
         let count = map_read(device, submission, &self.counter_readback, |b| {

@@ -74,7 +74,7 @@ pub async fn make(render: RenderHandle, job: FrameJob) -> Result<MadeFrame, Fram
     let (codec, quality, w, h) = (job.codec, job.quality, frame.width, frame.height);
     let stream = job.h264.clone();
     let (low_pass, inset, gaze) = (job.low_pass, job.inset, job.request.gaze);
-    let rgba = frame.rgba;
+    let (rgba, i420) = (frame.rgba, frame.i420);
     let encoded = tokio::task::spawn_blocking(move || {
         let _span = tracing::debug_span!("encode", frame = frame_no).entered();
         let start = Instant::now();
@@ -87,7 +87,11 @@ pub async fn make(render: RenderHandle, job: FrameJob) -> Result<MadeFrame, Fram
             (Codec::H264, Some(stream), _) => stream
                 .lock()
                 .map_err(|_| encode::EncodeError::H264("the stream's lock was poisoned".into()))
-                .and_then(|mut s| s.encode(&rgba, w, h))
+                .and_then(|mut s| match &i420 {
+                    // Converted on the GPU (no low-pass: that needs RGB).
+                    Some(planes) => s.encode_i420(planes, w, h),
+                    None => s.encode(&rgba, w, h),
+                })
                 .map(|f| (f.bytes, Some(f.keyframe), None)),
             (_, _, Some((deg, viewing))) => {
                 encode_inset(&rgba, w, h, g, &viewing, deg, codec, quality)

@@ -407,6 +407,8 @@ impl Session {
         request.camera = self.camera;
         request.stream = self.id;
         request.time_s = self.started.map_or(0.0, |t| t.elapsed().as_secs_f64());
+        // H.264 takes I420: the GPU converts, unless the CPU low-pass needs RGB first.
+        request.i420 = hello.codec == crate::protocol::Codec::H264 && !hello.foveated_encoding;
         Some(FrameJob {
             ticket,
             raw: (request.gaze != raw).then_some(raw),

@@ -5,6 +5,7 @@
 pub mod compact;
 pub mod dof;
 pub mod gbuffer;
+pub mod i420;
 pub mod jfa;
 pub mod output;
 pub mod photons;
