@@ -3,25 +3,25 @@
 //! Software Vulkan adapter; no adapter is a failure.
 
 use fovea::encode::yuv::rgba_to_i420;
-use fovea::render::{FrameRequest, Renderer};
+use fovea::render::{FrameRequest, Readback, Renderer};
 use fovea::settings::{Preset, RenderSettings};
 
 #[test]
 fn the_gpu_planes_match_the_cpu_conversion_of_the_same_frame() {
     let mut r = Renderer::new().unwrap_or_else(|e| panic!("GPU tests need an adapter: {e}"));
     // 322×242: 19 481 chroma samples a plane, not a whole number of words.
-    for (w, h) in [(320u32, 240u32), (322, 242)] {
-        let request = |stream: u64, i420: bool| {
+    for (w, h) in [(320u32, 240u32), (322, 242), (1280, 720)] {
+        let request = |stream: u64, readback: Readback| {
             let mut q = FrameRequest::new("gallery", w, h);
             q.settings = RenderSettings::of(Preset::Full);
             q.gaze = [0.4, 0.55];
             q.marker = true;
             q.stream = stream;
-            q.i420 = i420;
+            q.readback = readback;
             q
         };
-        let rgb = r.render(&request(1, false)).unwrap();
-        let gpu = r.render(&request(2, true)).unwrap();
+        let rgb = r.render(&request(1, Readback::Rgba)).unwrap();
+        let gpu = r.render(&request(2, Readback::I420)).unwrap();
         assert!(gpu.rgba.is_empty(), "an I420 frame is read back as planes only");
         let planes = gpu.i420.expect("planes");
         let (wu, hu) = (w as usize, h as usize);
@@ -45,11 +45,14 @@ fn the_gpu_planes_match_the_cpu_conversion_of_the_same_frame() {
             cpu.len()
         );
         eprintln!(
-            "{w}x{h}: readback {:.2} ms as I420 ({} bytes) against {:.2} ms as RGBA ({} bytes)",
+            "{w}x{h}: readback {:.2} ms as I420 ({} bytes) against {:.2} ms as RGBA ({} bytes); \
+             the i420 pass {:?} ms, output {:?} ms",
             gpu.readback_ms,
             planes.len(),
             rgb.readback_ms,
-            rgb.rgba.len()
+            rgb.rgba.len(),
+            gpu.passes_ms.get("i420"),
+            gpu.passes_ms.get("output"),
         );
     }
 }

@@ -19,7 +19,7 @@ use super::graph::Recorder;
 use super::pass::photons::PhotonInputs;
 use super::pass::shade;
 use super::renderer::{not_loaded, Renderer, TargetKey};
-use super::request::{FrameRequest, RenderedFrame, MAX_SIDE};
+use super::request::{FrameRequest, Readback, RenderedFrame, MAX_SIDE};
 use super::uniforms::FrameUniform;
 use super::RenderError;
 
@@ -193,6 +193,7 @@ impl Renderer {
         part: Part,
         photon_encoder: Option<wgpu::CommandBuffer>,
     ) -> Result<wgpu::SubmissionIndex, RenderError> {
+        let i420 = self.wants_i420(req);
         // Field by field: the targets, pipelines and timer are borrowed mutably below.
         let sg = self
             .scenes
@@ -206,7 +207,7 @@ impl Renderer {
             queue.write_buffer(buffer, offset, bytemuck::cast_slice(&[a, b]));
         }
         let mut plan = FramePlan::of(&req.settings, req.width, req.height, t.needs_dipole);
-        plan.i420 = wants_i420(req);
+        plan.i420 = i420;
         let scope = device.push_error_scope(wgpu::ErrorFilter::Validation);
         let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
             label: Some("frame"),
@@ -255,12 +256,24 @@ impl Renderer {
     }
 
     /// Reads the finished frame back.
+    /// Whether a frame is converted to I420 on the GPU and read back so (see `Readback`).
+    fn wants_i420(&self, req: &FrameRequest) -> bool {
+        let even = req.width % 2 == 0 && req.height % 2 == 0;
+        let gpu = self.gpu.info.device_type != wgpu::DeviceType::Cpu;
+        even && match req.readback {
+            Readback::Rgba => false,
+            Readback::I420Preferred => gpu,
+            Readback::I420 => true,
+        }
+    }
+
     fn finish(&mut self, f: &mut FrameInFlight, ti: usize) -> Result<RenderedFrame, RenderError> {
         let (w, h) = (f.req.width, f.req.height);
         let started = Instant::now();
+        let i420 = self.wants_i420(&f.req);
         let t = &self.targets[ti].1;
-        let (image, count) = t.read_back(&self.gpu.device, &self.gpu.queue, wants_i420(&f.req))?;
-        let (rgba, i420) = if wants_i420(&f.req) {
+        let (image, count) = t.read_back(&self.gpu.device, &self.gpu.queue, i420)?;
+        let (rgba, i420) = if i420 {
             (Vec::new(), Some(super::pass::i420::unpad(&image, w, h)))
         } else {
             (image, None)
@@ -306,7 +319,3 @@ mod tests {
     }
 }
 
-/// Whether a frame is read back as I420: asked for, and of even size (4:2:0).
-fn wants_i420(req: &FrameRequest) -> bool {
-    req.i420 && req.width % 2 == 0 && req.height % 2 == 0
-}

@@ -35,6 +35,36 @@ pub struct FrameJob {
     pub inset: Option<(f64, Viewing)>,
 }
 
+impl FrameJob {
+    /// The job for `request` in a session opened by `hello`: its codec and foveated encoding.
+    pub fn new(
+        ticket: Ticket,
+        raw: [f32; 2],
+        mut request: FrameRequest,
+        hello: &crate::protocol::Hello,
+        h264: Option<Arc<Mutex<H264Stream>>>,
+    ) -> FrameJob {
+        let viewing = || Viewing::new(hello.display, hello.width, hello.height);
+        // H.264 takes I420: the GPU converts where that is faster, unless the CPU low-pass
+        // needs RGB first.
+        if hello.codec == Codec::H264 && !hello.foveated_encoding {
+            request.readback = crate::render::Readback::I420Preferred;
+        }
+        FrameJob {
+            ticket,
+            raw: (request.gaze != raw).then_some(raw),
+            request,
+            codec: hello.codec,
+            quality: hello.quality,
+            h264,
+            low_pass: hello
+                .foveated_encoding
+                .then(|| (LowPass::default(), viewing())),
+            inset: hello.inset_deg.map(|deg| (deg, viewing())),
+        }
+    }
+}
+
 /// A frame ready for the socket.
 #[derive(Debug)]
 pub struct MadeFrame {

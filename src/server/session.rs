@@ -17,7 +17,6 @@ use super::pacing::Pacer;
 use super::recorder::Recorder;
 use super::timing::FrameTimes;
 use super::ServerState;
-use crate::encode::foveated::LowPass;
 use crate::encode::h264::{H264Config, H264Stream};
 use crate::gaze::prediction::Predictor;
 use crate::protocol::{
@@ -407,24 +406,7 @@ impl Session {
         request.camera = self.camera;
         request.stream = self.id;
         request.time_s = self.started.map_or(0.0, |t| t.elapsed().as_secs_f64());
-        // H.264 takes I420: the GPU converts, unless the CPU low-pass needs RGB first.
-        request.i420 = hello.codec == crate::protocol::Codec::H264 && !hello.foveated_encoding;
-        Some(FrameJob {
-            ticket,
-            raw: (request.gaze != raw).then_some(raw),
-            request,
-            codec: hello.codec,
-            quality: hello.quality,
-            h264: self.h264.clone(),
-            low_pass: hello.foveated_encoding.then(|| {
-                let viewing = Viewing::new(hello.display, hello.width, hello.height);
-                (LowPass::default(), viewing)
-            }),
-            inset: hello.inset_deg.map(|deg| {
-                let viewing = Viewing::new(hello.display, hello.width, hello.height);
-                (deg, viewing)
-            }),
-        })
+        Some(FrameJob::new(ticket, raw, request, hello, self.h264.clone()))
     }
 
     /// A frame is ready (queue it for the socket) or failed (return its credit, tell the client).
