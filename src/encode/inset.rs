@@ -168,7 +168,7 @@ mod tests {
         (0..w * h)
             .flat_map(|i| {
                 let (x, y) = (i % w, i / w);
-                [(x * 7 + y * 3) as u8, (x * 13 ^ y * 5) as u8, (x + y * 11) as u8, 255]
+                [(x * 7 + y * 3) as u8, ((x * 13) ^ (y * 5)) as u8, (x + y * 11) as u8, 255]
             })
             .collect()
     }
