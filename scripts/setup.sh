@@ -89,7 +89,9 @@ fi
 # Ubuntu 24.04: 1.75), so rustup installs a current one beside them.
 need=$(sed -n 's/^rust-version = "\(.*\)"/\1/p' Cargo.toml)
 [[ -f "$HOME/.cargo/env" ]] && . "$HOME/.cargo/env"
-have=$(cargo --version 2>/dev/null | sed -n 's/^cargo \([0-9]*\.[0-9]*\).*/\1/p')
+# (`|| true`: without cargo the pipeline fails, and under `set -e -o pipefail` that would end
+# the script silently right here on a fresh machine.)
+have=$(cargo --version 2>/dev/null | sed -n 's/^cargo \([0-9]*\.[0-9]*\).*/\1/p' || true)
 older() { [[ "$(printf '%s\n%s\n' "$1" "$2" | sort -V | head -n1)" != "$2" ]]; }
 if [[ -z "$have" ]] || older "$have" "$need"; then
   echo "setup: Rust ${have:-missing}, Fovea needs $need or newer: installing the stable toolchain with rustup"
