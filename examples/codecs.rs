@@ -173,7 +173,8 @@ fn main() -> anyhow::Result<()> {
                         let jpeg = |px: &[u8], pw, ph| encode(px, pw, ph, Codec::Jpeg, c.jpeg_q);
                         let (b, i) = (jpeg(&base, bw, bh)?, jpeg(&crop, plan.width, plan.height)?);
                         t.encode_ms.push(start.elapsed().as_secs_f64() * 1e3);
-                        let back = |b: &[u8]| image::load_from_memory(b).map(|d| d.to_rgba8().into_raw());
+                        let back =
+                            |b: &[u8]| image::load_from_memory(b).map(|d| d.to_rgba8().into_raw());
                         let shown = inset::compose(&back(&b)?, &back(&i)?, &plan, w, h);
                         ([b, i].concat(), shown)
                     }
@@ -219,7 +220,13 @@ fn main() -> anyhow::Result<()> {
     }
     // The floor under every codec that codes 8-bit 4:2:0 YCbCr: the colour conversion alone,
     // rounded (ours) and truncated (openh264's), no compression.
-    for (name, ours) in [("I420 round trip, rounded (no codec)", true), ("I420 round trip, openh264's truncating conversion (no codec)", false)] {
+    for (name, ours) in [
+        ("I420 round trip, rounded (no codec)", true),
+        (
+            "I420 round trip, openh264's truncating conversion (no codec)",
+            false,
+        ),
+    ] {
         let (mut fov, mut whole) = (Vec::new(), Vec::new());
         for (g, rgba) in rendered.iter().skip(2).step_by(3) {
             let back = if ours {
@@ -236,7 +243,11 @@ fn main() -> anyhow::Result<()> {
             fov.push(f);
             whole.push(a);
         }
-        let row = format!("| {name} | – | – | {:.4} | {:.4} | – |\n", mean(&fov), mean(&whole));
+        let row = format!(
+            "| {name} | – | – | {:.4} | {:.4} | – |\n",
+            mean(&fov),
+            mean(&whole)
+        );
         eprint!("{row}");
         table.push_str(&row);
     }

@@ -22,7 +22,10 @@ fn the_gpu_planes_match_the_cpu_conversion_of_the_same_frame() {
         };
         let rgb = r.render(&request(1, Readback::Rgba)).unwrap();
         let gpu = r.render(&request(2, Readback::I420)).unwrap();
-        assert!(gpu.rgba.is_empty(), "an I420 frame is read back as planes only");
+        assert!(
+            gpu.rgba.is_empty(),
+            "an I420 frame is read back as planes only"
+        );
         let planes = gpu.i420.expect("planes");
         let (wu, hu) = (w as usize, h as usize);
         assert_eq!(planes.len(), wu * hu * 3 / 2, "1.5 bytes a pixel");

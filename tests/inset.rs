@@ -89,7 +89,10 @@ async fn an_inset_session_sends_the_fovea_whole_and_the_rest_downscaled() {
     let (base, inset_bytes) = bytes.split_at(bytes.len() - i.inset_bytes);
     let (base, bw, bh) = png_rgba(base);
     let (crop, iw, ih) = png_rgba(inset_bytes);
-    assert_eq!((bw, bh, iw, ih), (i.base_width, i.base_height, i.width, i.height));
+    assert_eq!(
+        (bw, bh, iw, ih),
+        (i.base_width, i.base_height, i.width, i.height)
+    );
     // The inset is centred on the gaze used (the frame's own gaze, not moved by prediction).
     let viewing = Viewing::new(with_inset.display, w, h);
     let [px, py] = viewing.to_pixels([header.gaze.x, header.gaze.y]);
@@ -108,7 +111,10 @@ async fn an_inset_session_sends_the_fovea_whole_and_the_rest_downscaled() {
         height: i.height,
         scale: w.div_ceil(bw),
     };
-    assert!(plan.scale >= 2 && bw * bh * 4 <= w * h, "the base is smaller: {bw}x{bh}");
+    assert!(
+        plan.scale >= 2 && bw * bh * 4 <= w * h,
+        "the base is smaller: {bw}x{bh}"
+    );
     let shown = inset::compose(&base, &crop, &plan, w, h);
     // Around the gaze the composed frame is the plain session's frame, pixel for pixel.
     let mut same = 0;
@@ -126,8 +132,20 @@ async fn an_inset_session_sends_the_fovea_whole_and_the_rest_downscaled() {
 
     // H.264 and out-of-range sizes are refused with a reason; the server goes on.
     for (bad, says) in [
-        (Hello { codec: Codec::H264, ..with_inset.clone() }, "jpeg or png"),
-        (Hello { inset_deg: Some(1.0), ..with_inset.clone() }, "inset_deg"),
+        (
+            Hello {
+                codec: Codec::H264,
+                ..with_inset.clone()
+            },
+            "jpeg or png",
+        ),
+        (
+            Hello {
+                inset_deg: Some(1.0),
+                ..with_inset.clone()
+            },
+            "inset_deg",
+        ),
     ] {
         let mut c = Client::connect(&url).await.unwrap();
         let e = c.hello(&bad).await.unwrap_err();

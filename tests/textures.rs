@@ -39,7 +39,9 @@ fn quad(name: &str, corners: [[f32; 3]; 4], material: serde_json::Value, row: &[
     for c in corners.iter().flatten() {
         bin.extend_from_slice(&c.to_le_bytes());
     }
-    for c in [0f32, 1.0, 1.0, 1.0, 1.0, 0.0, 0.0, 0.0, 1.0, 1.0, 0.0, 1.0, 0.0, 0.0, 1.0, 0.0] {
+    for c in [
+        0f32, 1.0, 1.0, 1.0, 1.0, 0.0, 0.0, 0.0, 1.0, 1.0, 0.0, 1.0, 0.0, 0.0, 1.0, 0.0,
+    ] {
         bin.extend_from_slice(&c.to_le_bytes());
     }
     for i in [0u32, 1, 2, 0, 2, 3] {
@@ -179,7 +181,8 @@ fn each_map_reads_its_own_coordinate_set_and_transform() {
     let t = scene.mesh.tangent[1];
     assert!(t[1] < -0.999, "tangent along −y: {t:?}");
     // A set the primitive lacks leaves the map without coordinates rather than failing.
-    let material = json!({"pbrMetallicRoughness": {"baseColorTexture": {"index": 0, "texCoord": 5}}});
+    let material =
+        json!({"pbrMetallicRoughness": {"baseColorTexture": {"index": 0, "texCoord": 5}}});
     let scene = quad("missing-set", FACING_Z, material, &red_then_blue());
     assert!(scene.mesh.uv.iter().all(|uv| *uv == [0.0; 4]));
 }

@@ -111,7 +111,11 @@ pub fn weight(plan: &InsetPlan, width: u32, height: u32, x: u32, y: u32) -> f64 
         let band = FEATHER * f64::from(side);
         let from_start = f64::from(p - start) + 0.5;
         let from_end = f64::from(start + side - p) - 0.5;
-        let a = if start == 0 { 1.0 } else { (from_start / band).min(1.0) };
+        let a = if start == 0 {
+            1.0
+        } else {
+            (from_start / band).min(1.0)
+        };
         let b = if start + side == frame {
             1.0
         } else {
@@ -168,7 +172,12 @@ mod tests {
         (0..w * h)
             .flat_map(|i| {
                 let (x, y) = (i % w, i / w);
-                [(x * 7 + y * 3) as u8, ((x * 13) ^ (y * 5)) as u8, (x + y * 11) as u8, 255]
+                [
+                    (x * 7 + y * 3) as u8,
+                    ((x * 13) ^ (y * 5)) as u8,
+                    (x + y * 11) as u8,
+                    255,
+                ]
             })
             .collect()
     }
@@ -181,7 +190,10 @@ mod tests {
         // Gazes far enough from the edges that the inset is not moved inside the frame.
         for gaze in [[0.5, 0.5], [0.35, 0.55], [0.62, 0.45]] {
             let plan = plan(w, h, gaze, &v, 20.0, &LowPass::default());
-            assert!(plan.scale >= 2, "a 20° inset lets the base shrink: {plan:?}");
+            assert!(
+                plan.scale >= 2,
+                "a 20° inset lets the base shrink: {plan:?}"
+            );
             let [gx, gy] = v.to_pixels(gaze);
             let centre = [
                 f64::from(plan.x) + f64::from(plan.width) / 2.0,
@@ -194,7 +206,8 @@ mod tests {
             let mut checked = 0;
             for y in 0..h {
                 for x in 0..w {
-                    if v.eccentricity_deg([gx, gy], [f64::from(x) + 0.5, f64::from(y) + 0.5]) < 5.0 {
+                    if v.eccentricity_deg([gx, gy], [f64::from(x) + 0.5, f64::from(y) + 0.5]) < 5.0
+                    {
                         let i = ((y * w + x) * 4) as usize;
                         assert_eq!(shown[i..i + 4], rgba[i..i + 4], "pixel ({x}, {y})");
                         checked += 1;

@@ -64,7 +64,14 @@ impl openh264::formats::YUVSource for I420 {
 
 /// Writes the I420 planes of `rgba` (`width`×`height`, both even) into `y` (w·h), `u` and `v`
 /// (w/2 · h/2 each).
-pub fn rgba_to_i420(rgba: &[u8], width: usize, height: usize, y: &mut [u8], u: &mut [u8], v: &mut [u8]) {
+pub fn rgba_to_i420(
+    rgba: &[u8],
+    width: usize,
+    height: usize,
+    y: &mut [u8],
+    u: &mut [u8],
+    v: &mut [u8],
+) {
     let luma = |r: f32, g: f32, b: f32| 0.299 * r + 0.587 * g + 0.114 * b;
     let q = |x: f32| (x + 0.5).clamp(0.0, 255.0) as u8;
     let (hw, hh) = (width / 2, height / 2);
@@ -183,7 +190,11 @@ mod tests {
         let bias: f64 = back
             .chunks_exact(4)
             .zip(rgba.chunks_exact(4))
-            .map(|(a, b)| (0..3).map(|k| f64::from(a[k]) - f64::from(b[k])).sum::<f64>())
+            .map(|(a, b)| {
+                (0..3)
+                    .map(|k| f64::from(a[k]) - f64::from(b[k]))
+                    .sum::<f64>()
+            })
             .sum::<f64>()
             / (w * h * 3) as f64;
         assert!(bias.abs() < 0.1, "mean error {bias}");

@@ -13,7 +13,8 @@ mod parse;
 pub use crate::settings::SettingsPatch;
 pub use error::{ErrorCode, ProtocolError};
 pub use frame::{
-    decode_frame, encode_frame, FrameHeader, InsetHeader, GazeUsed, SolveProgress, StageTimes, Trigger,
+    decode_frame, encode_frame, FrameHeader, GazeUsed, InsetHeader, SolveProgress, StageTimes,
+    Trigger,
 };
 pub use limits::{Limits, SceneFileLimits};
 pub use messages::{

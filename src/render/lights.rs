@@ -83,7 +83,11 @@ fn depth_range(scene: &Scene, pos: Vec3) -> (f32, f32) {
 
 /// A perspective camera at `pos` looking along `axis`, `fov` radians wide.
 fn look(pos: Vec3, axis: Vec3, fov: f32, (near, far): (f32, f32)) -> Mat4 {
-    let up = if axis.y.abs() > 0.99 { Vec3::Z } else { Vec3::Y };
+    let up = if axis.y.abs() > 0.99 {
+        Vec3::Z
+    } else {
+        Vec3::Y
+    };
     Mat4::perspective_rh(fov, 1.0, near, far) * Mat4::look_at_rh(pos, pos + axis, up)
 }
 
@@ -100,7 +104,11 @@ pub fn light_views(scene: &Scene, l: &LightSpec) -> Option<LightViews> {
             let pos = Vec3::from(position);
             let axis = Vec3::from(direction).normalize_or(Vec3::NEG_Y);
             let fov = (2.0 * outer_deg).clamp(1.0, 170.0).to_radians();
-            (pos, vec![look(pos, axis, fov, depth_range(scene, pos))], fov)
+            (
+                pos,
+                vec![look(pos, axis, fov, depth_range(scene, pos))],
+                fov,
+            )
         }
         LightSpec::Point { position, .. } => {
             let pos = Vec3::from(position);
@@ -196,7 +204,9 @@ mod tests {
         let mut seen = [0; 6];
         let mut s = 12345u64;
         let mut next = || {
-            s = s.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            s = s
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
             (s >> 40) as f32 / (1u64 << 24) as f32 * 2.0 - 1.0
         };
         for k in 0..20_000 {

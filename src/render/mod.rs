@@ -38,7 +38,9 @@ pub mod uniforms;
 pub use device::Gpu;
 pub use inspect::PullPushInputs;
 pub use renderer::Renderer;
-pub use request::{FrameRequest, Inspection, Readback, RenderedFrame, DEFAULT_PUPIL_MM, MAX_SIDE, MIN_XI};
+pub use request::{
+    FrameRequest, Inspection, Readback, RenderedFrame, DEFAULT_PUPIL_MM, MAX_SIDE, MIN_XI,
+};
 pub use scheduler::SLICE_MS;
 pub use sliced::{bands, FrameInFlight, Progress};
 pub use targets::FrameTargets;

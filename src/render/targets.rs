@@ -143,7 +143,11 @@ impl FrameTargets {
             binds: HashMap::new(),
             routes: Routes::default(),
             readback: buffer("output.readback", pixels * 4, B::COPY_DST | B::MAP_READ),
-            i420_readback: buffer("output.i420.readback", i420_bytes, B::COPY_DST | B::MAP_READ),
+            i420_readback: buffer(
+                "output.i420.readback",
+                i420_bytes,
+                B::COPY_DST | B::MAP_READ,
+            ),
             counter_readback: buffer("compact.counter.readback", 16, B::COPY_DST | B::MAP_READ),
             prev_view_proj: glam::Mat4::IDENTITY,
             prev_eye: glam::Vec3::ZERO,
@@ -199,9 +203,7 @@ impl FrameTargets {
         let counter = self.buffer("compact.counter")?;
         encoder.copy_buffer_to_buffer(counter, 0, &self.counter_readback, 0, 16);
         let submission = queue.submit([encoder.finish()]);
-        let image = map_read(device, submission.clone(), readback, |bytes| {
-            bytes.to_vec()
-        })?;
+        let image = map_read(device, submission.clone(), readback, |bytes| bytes.to_vec())?;
         let count = map_read(device, submission, &self.counter_readback, |b| {
             u32::from_le_bytes([b[0], b[1], b[2], b[3]])
         })?;

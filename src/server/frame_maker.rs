@@ -9,8 +9,8 @@ use super::pacing::Ticket;
 use super::timing::FrameTimes;
 use crate::encode;
 use crate::encode::foveated::{self, LowPass};
-use crate::encode::inset;
 use crate::encode::h264::H264Stream;
+use crate::encode::inset;
 use crate::protocol::{
     encode_frame, Codec, ErrorCode, FrameHeader, GazeUsed, InsetHeader, ProtocolError,
     SolveProgress,

@@ -406,7 +406,13 @@ impl Session {
         request.camera = self.camera;
         request.stream = self.id;
         request.time_s = self.started.map_or(0.0, |t| t.elapsed().as_secs_f64());
-        Some(FrameJob::new(ticket, raw, request, hello, self.h264.clone()))
+        Some(FrameJob::new(
+            ticket,
+            raw,
+            request,
+            hello,
+            self.h264.clone(),
+        ))
     }
 
     /// A frame is ready (queue it for the socket) or failed (return its credit, tell the client).

@@ -34,9 +34,17 @@ async fn an_inset_frame_is_composed_where_the_gaze_was() {
     let f = Fixture::start(&[]).await;
     let page = f.page().await;
     eval(&page, "(() => { const s = document.getElementById('encoding'); s.value = 'inset'; s.dispatchEvent(new Event('change')); return true; })()").await;
-    wait_for(&page, "window.fovea.lastHeader && window.fovea.lastHeader.inset != null", 30).await;
+    wait_for(
+        &page,
+        "window.fovea.lastHeader && window.fovea.lastHeader.inset != null",
+        30,
+    )
+    .await;
     for (x, y) in [(0.35, 0.45), (0.6, 0.55)] {
-        let shown = eval(&page, "window.fovea.framesShown").await.as_u64().unwrap();
+        let shown = eval(&page, "window.fovea.framesShown")
+            .await
+            .as_u64()
+            .unwrap();
         gaze_at(&page, x, y).await;
         wait_for(&page, &format!("window.fovea.framesShown > {shown}"), 20).await;
     }
@@ -47,16 +55,28 @@ async fn an_inset_frame_is_composed_where_the_gaze_was() {
         i["x"].as_f64().unwrap() + i["width"].as_f64().unwrap() / 2.0,
         i["y"].as_f64().unwrap() + i["height"].as_f64().unwrap() / 2.0,
     ];
-    let gaze = [h["gaze"]["x"].as_f64().unwrap() * w, h["gaze"]["y"].as_f64().unwrap() * ht];
+    let gaze = [
+        h["gaze"]["x"].as_f64().unwrap() * w,
+        h["gaze"]["y"].as_f64().unwrap() * ht,
+    ];
     assert!(
         (centre[0] - gaze[0]).abs() <= 2.0 && (centre[1] - gaze[1]).abs() <= 2.0,
         "inset centred on the gaze: {centre:?} vs {gaze:?}"
     );
-    assert!(i["base_width"].as_f64().unwrap() < w, "the base is downscaled: {i}");
+    assert!(
+        i["base_width"].as_f64().unwrap() < w,
+        "the base is downscaled: {i}"
+    );
     let diff = eval(&page, CORE_DIFFERENCE).await.as_f64().unwrap();
-    assert!((0.0..1.0).contains(&diff), "the canvas shows the inset in its core: mean difference {diff}");
+    assert!(
+        (0.0..1.0).contains(&diff),
+        "the canvas shows the inset in its core: mean difference {diff}"
+    );
     let colours: u64 = serde_json::from_value(eval(&page, COLOURS).await).unwrap();
-    assert!(colours > 50, "the composed frame shows the scene ({colours} colours)");
+    assert!(
+        colours > 50,
+        "the composed frame shows the scene ({colours} colours)"
+    );
     assert!(eval(&page, "window.fovea.errors.length").await == Value::from(0));
     screenshot(&page, "inset").await;
     drop(page);

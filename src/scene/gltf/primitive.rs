@@ -36,8 +36,13 @@ pub fn read_primitive(
                 return Err(format!("{sem:?} accessor is empty"));
             }
             let float = a.data_type() == gltf::accessor::DataType::F32;
-            if a.dimensions() != dims || (!float
-                    && !matches!(sem, gltf::Semantic::Colors(_) | gltf::Semantic::TexCoords(_))) {
+            if a.dimensions() != dims
+                || (!float
+                    && !matches!(
+                        sem,
+                        gltf::Semantic::Colors(_) | gltf::Semantic::TexCoords(_)
+                    ))
+            {
                 return Err(format!(
                     "{sem:?} is {:?} {:?}; Fovea reads float {dims:?} (dequantize the file)",
                     a.data_type(),

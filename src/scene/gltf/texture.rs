@@ -86,7 +86,12 @@ impl UvMap {
             None => Some(tex_coord),
             Some(v) => v.as_u64().and_then(|s| u32::try_from(s).ok()),
         };
-        match (pair("offset", [0.0; 2]), rotation, pair("scale", [1.0; 2]), set) {
+        match (
+            pair("offset", [0.0; 2]),
+            rotation,
+            pair("scale", [1.0; 2]),
+            set,
+        ) {
             (Some([ox, oy]), Some(r), Some([sx, sy]), Some(set)) => {
                 let (s, c) = r.sin_cos();
                 map.set = set;
@@ -116,11 +121,13 @@ mod tests {
 
     #[test]
     fn the_extensions_example_reads_the_lower_left_quadrant_turned() {
-        let (m, notes) = map(serde_json::json!({"offset": [0, 1], "rotation": 1.5707964, "scale": [0.5, 0.5]}));
+        let (m, notes) =
+            map(serde_json::json!({"offset": [0, 1], "rotation": 1.5707964, "scale": [0.5, 0.5]}));
         assert!(notes.is_empty());
         // The unit square's corners land on the lower-left quadrant (u ≤ ½, v ≥ ½), turned:
         // the source's top edge (v = 0) runs down its left side.
-        let close = |a: [f32; 2], b: [f32; 2]| (a[0] - b[0]).abs() < 1e-6 && (a[1] - b[1]).abs() < 1e-6;
+        let close =
+            |a: [f32; 2], b: [f32; 2]| (a[0] - b[0]).abs() < 1e-6 && (a[1] - b[1]).abs() < 1e-6;
         assert!(close(m.apply([0.0, 0.0]), [0.0, 1.0]));
         assert!(close(m.apply([1.0, 0.0]), [0.0, 0.5]));
         assert!(close(m.apply([0.0, 1.0]), [0.5, 1.0]));
