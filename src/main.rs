@@ -104,6 +104,7 @@ enum Command {
     },
     /// Measure every preset and knob: frame time, per-pass GPU time, encode cost and the error
     /// against the reference render of the same frame; writes bench.json, bench.md, bench.svg.
+    /// `--sweep codecs --gaze-file F` compares the encoders instead (codecs.json, .md, .svg).
     ///
     /// Ctrl-C stops after the current frame and still writes what was measured.
     Bench(BenchArgs),
@@ -131,9 +132,9 @@ enum Command {
     /// result against direct light only and radiosity off; writes DIR/radiosity.json, .md and
     /// the direct / with-radiosity images.
     Radiosity(RadiosityArgs),
-    /// Redraw the plots of a bench.json or load.json (SVG and PNG beside it).
+    /// Redraw the plots of a bench.json, codecs.json or load.json (SVG and PNG beside it).
     Plot {
-        /// A bench.json (fovea bench) or load.json (fovea load).
+        /// A bench.json or codecs.json (fovea bench) or load.json (fovea load).
         file: PathBuf,
     },
 }
@@ -240,8 +241,19 @@ fn plot(file: &std::path::Path) -> Result<()> {
         let plot = fovea::plot::bench::BenchPlot::of(&report);
         fovea::plot::write(&plot, &dir.join("bench"))?;
         eprintln!("wrote {}/bench.svg and bench.png", dir.display());
+    } else if json.get("equal_quality").is_some() {
+        let report: fovea::bench::CodecReport = serde_json::from_value(json)
+            .with_context(|| format!("{} is not a codecs report", file.display()))?;
+        fovea::plot::write(
+            &fovea::plot::codecs::CodecPlot::of(&report),
+            &dir.join("codecs"),
+        )?;
+        eprintln!("wrote {}/codecs.svg and codecs.png", dir.display());
     } else {
-        bail!("{}: neither a bench.json nor a load.json", file.display());
+        bail!(
+            "{}: neither a bench.json, a codecs.json nor a load.json",
+            file.display()
+        );
     }
     Ok(())
 }

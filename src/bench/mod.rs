@@ -5,11 +5,20 @@
 //! drift and noise fall on all of them alike; reported times are medians with the 10th–90th
 //! percentile spread, and speedups are ratios against `full` from the same run.
 
+mod codecs;
+mod codecs_report;
 mod configs;
 mod ground_truth;
 mod report;
 mod run;
 
+pub use codecs::{
+    codec_configs, gaze_path, run_codecs, CodecBenchError, CodecConfig, CodecOptions, FPS,
+};
+pub use codecs_report::{
+    at_quality, write_codec_reports, AtQuality, CodecReport, CodecRow, EqualQuality, FloorRow,
+    TARGET,
+};
 pub use configs::{sweep, BenchConfig};
 pub use ground_truth::{GroundTruth, GroundTruthError};
 pub use report::{pareto_front, write_reports, BenchRecord, BenchReport, ReferenceTruth, Spread};

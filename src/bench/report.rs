@@ -347,7 +347,7 @@ pub fn write_reports(report: &BenchReport, dir: &Path) -> std::io::Result<()> {
 }
 
 /// Write to a temporary file and rename, so an interrupted run never leaves half a report.
-fn write_atomic(path: &Path, bytes: &[u8]) -> std::io::Result<()> {
+pub(super) fn write_atomic(path: &Path, bytes: &[u8]) -> std::io::Result<()> {
     let tmp = path.with_extension("tmp");
     std::fs::write(&tmp, bytes)?;
     std::fs::rename(tmp, path)

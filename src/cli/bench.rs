@@ -23,6 +23,9 @@ pub struct BenchArgs {
     #[arg(long)]
     pub moving: bool,
     /// Configurations: presets, rungs, knobs, or a comma-separated list of names from knobs.
+    /// `codecs` compares the encoders instead (JPEG q50–95, H.264 500–8000 kbit/s, each plain
+    /// and low-passed, JPEG with a 20° inset) on frames rendered along --gaze-file: one scene,
+    /// one size, --frames frames at 60 fps; writes codecs.json, codecs.md, codecs.svg.
     #[arg(long, default_value = "knobs")]
     pub sweep: String,
     /// Unmeasured frames per configuration and gaze before measuring.
@@ -48,11 +51,31 @@ pub struct BenchArgs {
     /// are also compared with it. Needs one scene and one size, the image's.
     #[arg(long)]
     pub against: Option<PathBuf>,
+    /// `--sweep codecs`: the recorded gaze the frames follow (any format `fovea replay` reads,
+    /// e.g. assets/gaze/eyelink_1000hz_1920x1080.csv).
+    #[arg(long)]
+    pub gaze_file: Option<PathBuf>,
+    /// `--sweep codecs`: the recording's screen WxH, for formats in pixels.
+    #[arg(long)]
+    pub screen: Option<String>,
+    /// `--sweep codecs`: start this many seconds into the recording.
+    #[arg(long, default_value_t = 0.0)]
+    pub gaze_from_s: f64,
+    /// `--sweep codecs`: also write each configuration's last frame as the page would show it
+    /// (and the lossless frame) to OUT/codecs/*.png.
+    #[arg(long)]
+    pub pictures: bool,
+    #[command(flatten, next_help_heading = "Reading --gaze-file")]
+    pub read: super::gaze::ReadArgs,
 }
 
 pub fn bench(a: BenchArgs) -> Result<()> {
-    use std::sync::atomic::{AtomicBool, Ordering};
-    use std::sync::Arc;
+    if a.sweep == "codecs" {
+        return super::codecs::bench_codecs(a);
+    }
+    if a.gaze_file.is_some() {
+        anyhow::bail!("--gaze-file is for --sweep codecs; the other sweeps use --gaze points");
+    }
     let configs = fovea::bench::sweep(&a.sweep).map_err(anyhow::Error::msg)?;
     let sizes = a
         .size
@@ -101,18 +124,32 @@ pub fn bench(a: BenchArgs) -> Result<()> {
         pupil_mm: a.pupil_mm,
         against,
     };
-    let stop = Arc::new(AtomicBool::new(false));
-    let flag = stop.clone();
-    ctrlc::set_handler(move || {
-        eprintln!("\nstopping after this frame; writing the results so far");
-        flag.store(true, Ordering::Relaxed);
-    })
-    .context("installing the Ctrl-C handler")?;
+    let stop = stop_on_ctrl_c()?;
     let mut renderer = Renderer::new().context("opening the GPU")?;
     eprintln!("adapter: {}", renderer.adapter());
+    let mut progress = progress_bar();
+    let report = fovea::bench::run(&mut renderer, &opts, &stop, &mut progress)?;
+    eprintln!();
+    fovea::bench::write_reports(&report, &a.out)
+        .with_context(|| format!("writing reports to {}", a.out.display()))?;
+    println!("{}", report.markdown());
+    eprintln!(
+        "wrote {}/bench.json, bench.md, bench.svg{}",
+        a.out.display(),
+        if report.interrupted {
+            " (interrupted)"
+        } else {
+            ""
+        }
+    );
+    Ok(())
+}
+
+/// A one-line progress bar with an ETA, redrawn at most five times a second.
+pub(super) fn progress_bar() -> impl FnMut(usize, usize, &str) {
     let started = std::time::Instant::now();
-    let mut last_draw = std::time::Instant::now() - std::time::Duration::from_secs(1);
-    let mut progress = |done: usize, total: usize, what: &str| {
+    let mut last_draw = started - std::time::Duration::from_secs(1);
+    move |done: usize, total: usize, what: &str| {
         if last_draw.elapsed().as_millis() < 200 && done < total {
             return;
         }
@@ -131,20 +168,17 @@ pub fn bench(a: BenchArgs) -> Result<()> {
             frac * 100.0,
             eta
         );
-    };
-    let report = fovea::bench::run(&mut renderer, &opts, &stop, &mut progress)?;
-    eprintln!();
-    fovea::bench::write_reports(&report, &a.out)
-        .with_context(|| format!("writing reports to {}", a.out.display()))?;
-    println!("{}", report.markdown());
-    eprintln!(
-        "wrote {}/bench.json, bench.md, bench.svg{}",
-        a.out.display(),
-        if report.interrupted {
-            " (interrupted)"
-        } else {
-            ""
-        }
-    );
-    Ok(())
+    }
+}
+
+/// Ctrl-C sets the returned flag: the run stops after the frame in hand and keeps its results.
+pub(super) fn stop_on_ctrl_c() -> Result<std::sync::Arc<std::sync::atomic::AtomicBool>> {
+    let stop = std::sync::Arc::new(std::sync::atomic::AtomicBool::new(false));
+    let flag = stop.clone();
+    ctrlc::set_handler(move || {
+        eprintln!("\nstopping after this frame; writing the results so far");
+        flag.store(true, std::sync::atomic::Ordering::Relaxed);
+    })
+    .context("installing the Ctrl-C handler")?;
+    Ok(stop)
 }

@@ -2,6 +2,7 @@
 
 pub mod access;
 pub mod bench;
+pub mod codecs;
 pub mod gaze;
 pub mod load;
 pub mod parse;

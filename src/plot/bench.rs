@@ -29,7 +29,7 @@ pub struct BenchPlot {
 }
 
 /// Tick values 1, 2, 5 × 10ⁿ around [lo, hi]: readable labels on a log axis.
-fn one_two_five(lo: f64, hi: f64) -> Vec<f64> {
+pub(super) fn one_two_five(lo: f64, hi: f64) -> Vec<f64> {
     let mut out = Vec::new();
     let mut decade = 10f64.powf((lo / 1.3).max(1e-6).log10().floor());
     while decade <= hi * 1.3 {

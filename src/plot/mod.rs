@@ -1,9 +1,10 @@
 //! Plots people can read, drawn with `plotters` to SVG and PNG from the same code: the bench's
-//! cost-vs-error chart ([`bench`]), the load sweep ([`load`]) and gaze prediction error
+//! cost-vs-error chart ([`bench`]), the codecs' bytes against quality ([`codecs`]), the load sweep ([`load`]) and gaze prediction error
 //! against horizon ([`gaze`]). Labels use DejaVu Sans, embedded, so a PNG looks the same on
 //! every machine.
 
 pub mod bench;
+pub mod codecs;
 pub mod gaze;
 pub mod load;
 

@@ -1,0 +1,449 @@
+//! `fovea bench --sweep codecs`: every encoder configuration on the same rendered frames along a
+//! recorded gaze path, so inter-frame coding and the foveated encodings see moving gaze, not a
+//! still frame. Each frame is encoded, decoded as the page would show it, and compared with the
+//! lossless frame: FLIP within 5° of that frame's gaze and over the whole frame.
+
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::time::{Duration, Instant};
+
+use serde::{Deserialize, Serialize};
+
+use super::codecs_report::{CodecReport, CodecRow, FloorRow};
+use super::report::{Machine, Spread};
+use crate::encode::foveated::{low_pass, LowPass};
+use crate::encode::h264::{H264Config, H264Stream, DEFAULT_KEYFRAME_S};
+use crate::encode::{encode, inset, yuv, EncodeError};
+use crate::gaze::formats::Recording;
+use crate::protocol::{Codec, Display};
+use crate::quality::{flip_map, foveal_mask, pixels_per_degree, pooled_mean};
+use crate::render::{FrameRequest, RenderError, Renderer};
+use crate::settings::{Preset, RenderSettings};
+use crate::viewing::Viewing;
+
+/// The frame rate the gaze path is sampled at and the kbit/s column assumes.
+pub const FPS: f64 = 60.0;
+
+/// How each frame is encoded.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct CodecConfig {
+    pub name: String,
+    pub codec: Codec,
+    /// JPEG quality (JPEG configurations).
+    pub jpeg_q: u8,
+    /// Target bitrate (H.264 configurations).
+    pub h264_kbps: Option<u32>,
+    /// The eccentricity-matched low-pass before encoding.
+    pub low_pass: bool,
+    /// A downscaled frame plus a foveal inset this many degrees wide (JPEG).
+    pub inset_deg: Option<f64>,
+}
+
+impl CodecConfig {
+    /// The curve a configuration belongs to: the same codec and foveated encoding, varying only
+    /// in quality or bitrate.
+    pub fn family(&self) -> String {
+        let codec = match self.codec {
+            Codec::H264 => "H.264",
+            Codec::Png => "PNG",
+            Codec::Jpeg => "JPEG",
+        };
+        match (self.low_pass, self.inset_deg) {
+            (_, Some(deg)) => format!("{codec} + inset {deg}°"),
+            (true, None) => format!("{codec} + low-pass"),
+            (false, None) => codec.to_string(),
+        }
+    }
+}
+
+/// JPEG q50–95 and H.264 at 500–8000 kbit/s, each plain and low-passed, and JPEG with a 20°
+/// inset: the encoder comparison issue 16 asks for.
+pub fn codec_configs() -> Vec<CodecConfig> {
+    let mut out = Vec::new();
+    let jpeg = |q: u8, low_pass: bool, inset_deg: Option<f64>| CodecConfig {
+        name: String::new(),
+        codec: Codec::Jpeg,
+        jpeg_q: q,
+        h264_kbps: None,
+        low_pass,
+        inset_deg,
+    };
+    for low in [false, true] {
+        for q in [50u8, 75, 85, 95] {
+            out.push(jpeg(q, low, None));
+        }
+        for kbps in [500u32, 1000, 2000, 4000, 8000] {
+            out.push(CodecConfig {
+                h264_kbps: Some(kbps),
+                codec: Codec::H264,
+                ..jpeg(0, low, None)
+            });
+        }
+    }
+    for q in [50u8, 75, 85, 95] {
+        out.push(jpeg(q, false, Some(20.0)));
+    }
+    for c in &mut out {
+        let knob = match c.h264_kbps {
+            Some(k) => format!("{k} kbit/s"),
+            None => format!("q{}", c.jpeg_q),
+        };
+        let family = c.family();
+        c.name = match family.split_once(" + ") {
+            Some((codec, rest)) => format!("{codec} {knob} + {rest}"),
+            None => format!("{family} {knob}"),
+        };
+    }
+    out
+}
+
+#[derive(Debug, Clone)]
+pub struct CodecOptions {
+    pub scene: String,
+    pub width: u32,
+    pub height: u32,
+    /// One normalised gaze point per frame (see [`gaze_path`]).
+    pub path: Vec<[f64; 2]>,
+    /// Where the path came from, for the report.
+    pub recording: String,
+    pub configs: Vec<CodecConfig>,
+    pub display: Display,
+    /// Write each configuration's last decoded frame (and the lossless one) as PNG here.
+    pub pictures: Option<std::path::PathBuf>,
+}
+
+#[derive(Debug, thiserror::Error)]
+pub enum CodecBenchError {
+    #[error(transparent)]
+    Render(#[from] RenderError),
+    #[error("{config}: {source}")]
+    Encode { config: String, source: EncodeError },
+    #[error("{config}: decoding its own frame: {message}")]
+    Decode { config: String, message: String },
+    #[error("the recording has no gaze the server would show from {from_s} s on")]
+    NoGaze { from_s: f64 },
+    #[error("{frames} frames of {width}x{height}: H.264 needs an even width and height")]
+    OddSize {
+        frames: usize,
+        width: u32,
+        height: u32,
+    },
+    #[error("writing {path}: {message}")]
+    Picture { path: String, message: String },
+}
+
+/// `frames` gaze points one 1/60 s apart from `from_s` seconds into the recording: at each
+/// time, the first sample at or after it that replay would send (so track loss holds the
+/// next good sample, as the server would show). Past the recording's end the last good sample
+/// holds.
+pub fn gaze_path(
+    rec: &Recording,
+    from_s: f64,
+    frames: usize,
+) -> Result<Vec<[f64; 2]>, CodecBenchError> {
+    let t0 = rec.samples.first().map(|s| s.t_ms).unwrap_or(0.0) + from_s * 1e3;
+    let mut out = Vec::with_capacity(frames);
+    let mut last = None;
+    for k in 0..frames {
+        let t = t0 + k as f64 * 1e3 / FPS;
+        let i = rec.samples.partition_point(|s| s.t_ms < t);
+        let g = rec.samples[i..]
+            .iter()
+            .find_map(crate::gaze::sendable)
+            .or(last);
+        let Some(g) = g else {
+            return Err(CodecBenchError::NoGaze { from_s });
+        };
+        last = Some(g);
+        out.push(g);
+    }
+    Ok(out)
+}
+
+/// What one configuration measured.
+#[derive(Default)]
+struct Tally {
+    bytes: Vec<f64>,
+    keyframe_bytes: Option<f64>,
+    encode_ms: Vec<f64>,
+    foveal: Vec<f64>,
+    whole: Vec<f64>,
+}
+
+type Frames = [([f64; 2], Vec<u8>)];
+
+/// Renders the path's frames once, then encodes, decodes and scores them with every
+/// configuration. `stop` ends the run early with what was measured.
+pub fn run_codecs(
+    renderer: &mut Renderer,
+    opts: &CodecOptions,
+    stop: &AtomicBool,
+    progress: super::Progress,
+) -> Result<CodecReport, CodecBenchError> {
+    let (w, h) = (opts.width, opts.height);
+    if opts.configs.iter().any(|c| c.codec == Codec::H264) && (w % 2 == 1 || h % 2 == 1) {
+        return Err(CodecBenchError::OddSize {
+            frames: opts.path.len(),
+            width: w,
+            height: h,
+        });
+    }
+    let started = Instant::now();
+    let viewing = Viewing {
+        width: w,
+        height: h,
+        width_cm: opts.display.width_cm,
+        distance_cm: opts.display.distance_cm,
+    };
+    let total = opts.path.len() * (1 + opts.configs.len());
+    let mut done = 0;
+    let mut frames = Vec::new();
+    for (k, g) in opts.path.iter().enumerate() {
+        if stop.load(Ordering::Relaxed) {
+            break;
+        }
+        // As a session renders: its default preset, one history stream, the clock at 60 fps
+        // (animated lights move), so consecutive frames differ as they do on the wire.
+        let mut req = FrameRequest::new(&opts.scene, w, h);
+        req.gaze = [g[0] as f32, g[1] as f32];
+        req.settings = RenderSettings::of(Preset::DEFAULT);
+        req.stream = 1;
+        req.time_s = k as f64 / FPS;
+        frames.push((*g, renderer.render(&req)?.rgba));
+        done += 1;
+        progress(done, total, "rendering the path");
+    }
+    let mut rows = Vec::new();
+    for config in &opts.configs {
+        if stop.load(Ordering::Relaxed) || frames.is_empty() {
+            break;
+        }
+        let mut tick = |k: usize| progress(done + k + 1, total, &config.name);
+        let (t, last) = measure(config, &frames, &viewing, &mut tick)?;
+        done += frames.len();
+        if let Some(dir) = &opts.pictures {
+            save(dir, &slug(&config.name), &last, w, h)?;
+        }
+        rows.push(CodecRow {
+            name: config.name.clone(),
+            family: config.family(),
+            config: config.clone(),
+            bytes: Spread::of(&t.bytes),
+            keyframe_bytes: t.keyframe_bytes,
+            kbps: kbps_at_fps(&t.bytes, t.keyframe_bytes),
+            flip_fovea: mean(&t.foveal),
+            flip: mean(&t.whole),
+            encode_ms: Spread::of(&t.encode_ms),
+        });
+    }
+    if let (Some(dir), Some((_, rgba))) = (&opts.pictures, frames.last()) {
+        save(dir, "lossless", rgba, w, h)?;
+    }
+    let floors = if stop.load(Ordering::Relaxed) {
+        Vec::new()
+    } else {
+        floors(&frames, &viewing)
+    };
+    let mut report = CodecReport {
+        machine: Machine::describe(renderer),
+        scene: opts.scene.clone(),
+        preset: Preset::DEFAULT.name().to_string(),
+        width: w,
+        height: h,
+        recording: opts.recording.clone(),
+        frames: frames.len(),
+        fps: FPS,
+        seconds: started.elapsed().as_secs_f64(),
+        interrupted: stop.load(Ordering::Relaxed),
+        rows,
+        floors,
+        equal_quality: Vec::new(),
+    };
+    report.finish();
+    Ok(report)
+}
+
+fn mean(v: &[f64]) -> f64 {
+    v.iter().sum::<f64>() / v.len() as f64
+}
+
+/// Mean FLIP within 5° of the gaze, and over the whole frame.
+fn score(viewing: &Viewing, reference: &[u8], shown: &[u8], g: [f64; 2]) -> (f64, f64) {
+    let map = flip_map(
+        reference,
+        shown,
+        viewing.width,
+        viewing.height,
+        pixels_per_degree(viewing),
+    );
+    let fovea = foveal_mask(viewing, viewing.to_pixels(g), 5.0);
+    (pooled_mean(&map, &fovea), mean(&map))
+}
+
+/// Encodes every frame with one configuration (one H.264 stream over all of them), decodes
+/// each as the page would show it and scores it. Returns the tally and the last frame shown.
+fn measure(
+    config: &CodecConfig,
+    frames: &Frames,
+    viewing: &Viewing,
+    tick: &mut dyn FnMut(usize),
+) -> Result<(Tally, Vec<u8>), CodecBenchError> {
+    let (w, h) = (viewing.width, viewing.height);
+    let encode_err = |source| CodecBenchError::Encode {
+        config: config.name.clone(),
+        source,
+    };
+    let decode_err = |message: String| CodecBenchError::Decode {
+        config: config.name.clone(),
+        message,
+    };
+    // One keyframe at the start; the report adds the session's periodic ones to the bitrate,
+    // rather than letting the wall clock of a slow run decide where they fall.
+    let mut stream = config.h264_kbps.map(|kbps| {
+        H264Stream::new(H264Config {
+            kbps,
+            keyframe_every: Duration::from_secs(24 * 3600),
+        })
+    });
+    let mut decoder = match stream {
+        Some(_) => Some(openh264::decoder::Decoder::new().map_err(|e| decode_err(e.to_string()))?),
+        None => None,
+    };
+    let acuity = LowPass::default();
+    let mut t = Tally::default();
+    let mut shown = Vec::new();
+    for (k, (g, rgba)) in frames.iter().enumerate() {
+        let start = Instant::now();
+        let input = if config.low_pass {
+            low_pass(rgba, w, h, *g, viewing, &acuity)
+        } else {
+            rgba.clone()
+        };
+        let (bytes, keyframe) = match (&mut stream, config.inset_deg) {
+            (Some(s), _) => {
+                // Timed as frames at FPS: the rate control spends the bitrate over that time.
+                let ms = (k as f64 * 1e3 / FPS) as u64;
+                let f = s.encode_at(&input, w, h, ms).map_err(encode_err)?;
+                t.encode_ms.push(start.elapsed().as_secs_f64() * 1e3);
+                let dec = decoder
+                    .as_mut()
+                    .ok_or_else(|| decode_err("no decoder".into()))?;
+                let pic = dec
+                    .decode(&f.bytes)
+                    .map_err(|e| decode_err(e.to_string()))?
+                    .ok_or_else(|| decode_err("no picture for a whole frame".into()))?;
+                // Rounded, as a browser's decoder shows it (openh264's own truncates).
+                shown = yuv::picture_to_rgba(&pic);
+                (f.bytes.len(), f.keyframe)
+            }
+            (None, Some(deg)) => {
+                let plan = inset::plan(w, h, *g, viewing, deg, &acuity);
+                let (base, crop) = inset::split(&input, w, h, &plan);
+                let (bw, bh) = plan.base_size(w, h);
+                let jpeg = |px: &[u8], pw, ph| encode(px, pw, ph, Codec::Jpeg, config.jpeg_q);
+                let b = jpeg(&base, bw, bh).map_err(encode_err)?;
+                let i = jpeg(&crop, plan.width, plan.height).map_err(encode_err)?;
+                t.encode_ms.push(start.elapsed().as_secs_f64() * 1e3);
+                let (b_px, i_px) = (decode_image(&b), decode_image(&i));
+                let (b_px, i_px) = (b_px.map_err(decode_err)?, i_px.map_err(decode_err)?);
+                shown = inset::compose(&b_px, &i_px, &plan, w, h);
+                (b.len() + i.len(), false)
+            }
+            (None, None) => {
+                let b = encode(&input, w, h, config.codec, config.jpeg_q).map_err(encode_err)?;
+                t.encode_ms.push(start.elapsed().as_secs_f64() * 1e3);
+                shown = decode_image(&b).map_err(decode_err)?;
+                (b.len(), false)
+            }
+        };
+        if keyframe {
+            t.keyframe_bytes = Some(bytes as f64);
+        } else {
+            t.bytes.push(bytes as f64);
+        }
+        let (f, a) = score(viewing, rgba, &shown, *g);
+        t.foveal.push(f);
+        t.whole.push(a);
+        tick(k);
+    }
+    Ok((t, shown))
+}
+
+fn decode_image(bytes: &[u8]) -> Result<Vec<u8>, String> {
+    image::load_from_memory(bytes)
+        .map(|d| d.to_rgba8().into_raw())
+        .map_err(|e| e.to_string())
+}
+
+/// Bits per second at [`FPS`] in kbit/s: the P-frames' mean plus a keyframe every
+/// [`DEFAULT_KEYFRAME_S`] seconds, as a session sends them.
+fn kbps_at_fps(bytes: &[f64], keyframe: Option<f64>) -> f64 {
+    let m = if bytes.is_empty() { 0.0 } else { mean(bytes) };
+    let per_s = match keyframe {
+        Some(k) => {
+            let n = FPS * DEFAULT_KEYFRAME_S;
+            (k + (n - 1.0) * m) / DEFAULT_KEYFRAME_S
+        }
+        None => m * FPS,
+    };
+    per_s * 8.0 / 1e3
+}
+
+fn slug(name: &str) -> String {
+    name.chars()
+        .map(|c| if c.is_ascii_alphanumeric() { c } else { '_' })
+        .collect()
+}
+
+fn save(
+    dir: &std::path::Path,
+    name: &str,
+    rgba: &[u8],
+    w: u32,
+    h: u32,
+) -> Result<(), CodecBenchError> {
+    let path = dir.join(format!("{name}.png"));
+    let fail = |message: String| CodecBenchError::Picture {
+        path: path.display().to_string(),
+        message,
+    };
+    std::fs::create_dir_all(dir).map_err(|e| fail(e.to_string()))?;
+    let png = encode(rgba, w, h, Codec::Png, 100).map_err(|e| fail(e.to_string()))?;
+    std::fs::write(&path, png).map_err(|e| fail(e.to_string()))
+}
+
+/// The floor under every codec that codes 8-bit 4:2:0 YCbCr: the colour conversion alone,
+/// rounded (ours, and a browser's decoder) and truncated (openh264's own), no compression.
+fn floors(frames: &Frames, viewing: &Viewing) -> Vec<FloorRow> {
+    let (w, h) = (viewing.width as usize, viewing.height as usize);
+    let mut rows = Vec::new();
+    for (name, rounded) in [
+        ("I420 round trip, rounded (no codec)", true),
+        (
+            "I420 round trip, truncated as openh264 converts (no codec)",
+            false,
+        ),
+    ] {
+        let (mut fov, mut whole) = (Vec::new(), Vec::new());
+        for (g, rgba) in frames {
+            let back = if rounded {
+                let mut pic = yuv::I420::new(w, h);
+                pic.fill(rgba);
+                yuv::picture_to_rgba(&pic)
+            } else {
+                let pic = openh264::formats::YUVBuffer::from_rgba8_source(
+                    openh264::formats::RgbaSliceU8::new(rgba, (w, h)),
+                );
+                yuv::picture_to_rgba(&pic)
+            };
+            let (f, a) = score(viewing, rgba, &back, *g);
+            fov.push(f);
+            whole.push(a);
+        }
+        rows.push(FloorRow {
+            name: name.into(),
+            flip_fovea: mean(&fov),
+            flip: mean(&whole),
+        });
+    }
+    rows
+}

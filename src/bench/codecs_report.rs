@@ -1,0 +1,264 @@
+//! The codec sweep's results: one row per encoder configuration, the 4:2:0 floor, and each
+//! family's bytes at equal foveal quality, read off its bytes-vs-FLIP curve.
+
+use std::path::Path;
+
+use serde::{Deserialize, Serialize};
+
+use super::codecs::CodecConfig;
+use super::report::{Machine, Spread};
+
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct CodecRow {
+    pub name: String,
+    pub family: String,
+    pub config: CodecConfig,
+    /// Bytes per frame, keyframes excluded.
+    pub bytes: Spread,
+    /// The stream's first frame (H.264).
+    pub keyframe_bytes: Option<f64>,
+    /// kbit/s at 60 frames per second, a keyframe every two seconds included (H.264).
+    pub kbps: f64,
+    /// Mean FLIP within 5° of each frame's gaze, against the lossless frame.
+    pub flip_fovea: f64,
+    /// Mean FLIP over the whole frame.
+    pub flip: f64,
+    /// Wall time of the encode: low-pass, colour conversion and coding, on one core.
+    pub encode_ms: Spread,
+}
+
+/// FLIP of a conversion alone (no codec): the best any 4:2:0 codec can show.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct FloorRow {
+    pub name: String,
+    pub flip_fovea: f64,
+    pub flip: f64,
+}
+
+/// A family's bitrate (kbit/s at 60 fps, keyframes included) at the target's foveal FLIP.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "kind", content = "bytes", rename_all = "snake_case")]
+pub enum AtQuality {
+    /// Between two measured configurations (log bitrate linear in FLIP).
+    Interpolated(f64),
+    /// Even the family's lowest bitrate beats the target: at most this.
+    AtMost(f64),
+    /// Even the family's highest bitrate misses the target.
+    Unreached,
+}
+
+impl AtQuality {
+    pub fn bytes(&self) -> Option<f64> {
+        match self {
+            AtQuality::Interpolated(b) | AtQuality::AtMost(b) => Some(*b),
+            AtQuality::Unreached => None,
+        }
+    }
+}
+
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct EqualQuality {
+    pub family: String,
+    pub at: AtQuality,
+    /// Bitrate over the target configuration's (JPEG q85).
+    pub vs_target: Option<f64>,
+    /// Bitrate over the same codec's without foveated encoding, at the same FLIP.
+    pub vs_plain: Option<f64>,
+}
+
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct CodecReport {
+    pub machine: Machine,
+    pub scene: String,
+    /// The preset the frames were rendered with (a session's default).
+    pub preset: String,
+    pub width: u32,
+    pub height: u32,
+    pub recording: String,
+    pub frames: usize,
+    pub fps: f64,
+    pub seconds: f64,
+    pub interrupted: bool,
+    pub rows: Vec<CodecRow>,
+    pub floors: Vec<FloorRow>,
+    /// Against [`TARGET`]'s foveal FLIP.
+    pub equal_quality: Vec<EqualQuality>,
+}
+
+/// The configuration whose foveal quality the others are matched to.
+pub const TARGET: &str = "JPEG q85";
+
+/// The bitrate (or bytes) at foveal FLIP `target` along a family's measured points (bitrate,
+/// FLIP). FLIP need not fall monotonically with bitrate (rate control is not exact): the first
+/// crossing, walking up from the lowest bitrate, is taken.
+pub fn at_quality(points: &[(f64, f64)], target: f64) -> AtQuality {
+    let mut p: Vec<(f64, f64)> = points
+        .iter()
+        .copied()
+        .filter(|(b, f)| *b > 0.0 && b.is_finite() && f.is_finite())
+        .collect();
+    p.sort_by(|a, b| a.0.total_cmp(&b.0));
+    let Some(first) = p.first() else {
+        return AtQuality::Unreached;
+    };
+    if first.1 <= target {
+        return AtQuality::AtMost(first.0);
+    }
+    for pair in p.windows(2) {
+        let ((b0, f0), (b1, f1)) = (pair[0], pair[1]);
+        if f1 <= target {
+            // f0 > target ≥ f1, so the denominator is positive.
+            let s = (f0 - target) / (f0 - f1);
+            return AtQuality::Interpolated((b0.ln() + s * (b1.ln() - b0.ln())).exp());
+        }
+    }
+    AtQuality::Unreached
+}
+
+impl CodecReport {
+    /// Fills `equal_quality`: every family's bitrate at the target's foveal FLIP. Bitrates, not
+    /// median frames, so H.264's keyframes count as they do on the wire.
+    pub fn finish(&mut self) {
+        self.equal_quality.clear();
+        let Some(target) = self.rows.iter().find(|r| r.name == TARGET) else {
+            return;
+        };
+        let (goal, goal_kbps) = (target.flip_fovea, target.kbps);
+        let mut families: Vec<&str> = self.rows.iter().map(|r| r.family.as_str()).collect();
+        families.dedup();
+        let at = |family: &str| {
+            let pts: Vec<(f64, f64)> = self
+                .rows
+                .iter()
+                .filter(|r| r.family == family)
+                .map(|r| (r.kbps, r.flip_fovea))
+                .collect();
+            at_quality(&pts, goal)
+        };
+        for family in families {
+            let here = at(family);
+            let codec = family.split(" + ").next().unwrap_or(family);
+            let plain = (codec != family).then(|| at(codec));
+            self.equal_quality.push(EqualQuality {
+                family: family.to_string(),
+                at: here,
+                vs_target: here.bytes().map(|b| b / goal_kbps),
+                vs_plain: plain
+                    .and_then(|p| p.bytes())
+                    .zip(here.bytes())
+                    .map(|(p, b)| b / p),
+            });
+        }
+    }
+
+    pub fn markdown(&self) -> String {
+        let mut s = format!(
+            "# Codecs on {} ({}) at {}×{}, {} frames along {} ({} fps)\n\n{} · {} CPUs · {:.0} s{}\n\n",
+            self.scene,
+            self.preset,
+            self.width,
+            self.height,
+            self.frames,
+            self.recording,
+            self.fps,
+            self.machine.adapter,
+            self.machine.cpus,
+            self.seconds,
+            if self.interrupted {
+                " · interrupted: partial results"
+            } else {
+                ""
+            }
+        );
+        s.push_str("FLIP against the lossless frame; foveal = within 5° of each frame's gaze. Bytes per frame exclude the H.264 keyframe; kbit/s adds one every 2 s.\n\n");
+        s.push_str("| configuration | bytes/frame (median) | H.264 keyframe bytes | kbit/s at 60 fps | foveal FLIP | whole-frame FLIP | encode ms (median) |\n|---|---:|---:|---:|---:|---:|---:|\n");
+        for r in &self.rows {
+            let key = r.keyframe_bytes.map_or("–".into(), |k| format!("{k:.0}"));
+            s.push_str(&format!(
+                "| {} | {:.0} | {key} | {:.0} | {:.4} | {:.4} | {:.1} |\n",
+                r.name, r.bytes.median, r.kbps, r.flip_fovea, r.flip, r.encode_ms.median
+            ));
+        }
+        for f in &self.floors {
+            s.push_str(&format!(
+                "| {} | – | – | – | {:.4} | {:.4} | – |\n",
+                f.name, f.flip_fovea, f.flip
+            ));
+        }
+        if let Some(t) = self.rows.iter().find(|r| r.name == TARGET) {
+            s.push_str(&format!(
+                "\n## At {TARGET}'s foveal quality (FLIP {:.4}, {:.0} kbit/s)\n\nEach family's bitrate where its curve crosses that FLIP (log bitrate interpolated between the two configurations around it).\n\n| family | kbit/s at 60 fps | vs {TARGET} | vs the same codec without foveated encoding |\n|---|---:|---:|---:|\n",
+                t.flip_fovea, t.kbps
+            ));
+            let pct = |v: Option<f64>| v.map_or("–".into(), |v| format!("{:.1}%", 100.0 * v));
+            for e in &self.equal_quality {
+                let bytes = match e.at {
+                    AtQuality::Interpolated(b) => format!("{b:.0}"),
+                    AtQuality::AtMost(b) => format!("≤ {b:.0}"),
+                    AtQuality::Unreached => "not reached".into(),
+                };
+                s.push_str(&format!(
+                    "| {} | {bytes} | {} | {} |\n",
+                    e.family,
+                    pct(e.vs_target),
+                    pct(e.vs_plain)
+                ));
+            }
+        }
+        s
+    }
+}
+
+/// Writes `codecs.json`, `codecs.md` and the bytes-vs-quality plot `codecs.svg`/`.png`.
+pub fn write_codec_reports(report: &CodecReport, dir: &Path) -> std::io::Result<()> {
+    std::fs::create_dir_all(dir)?;
+    let json = serde_json::to_string_pretty(report).map_err(std::io::Error::other)?;
+    super::report::write_atomic(&dir.join("codecs.json"), json.as_bytes())?;
+    super::report::write_atomic(&dir.join("codecs.md"), report.markdown().as_bytes())?;
+    crate::plot::write(
+        &crate::plot::codecs::CodecPlot::of(report),
+        &dir.join("codecs"),
+    )
+    .map_err(std::io::Error::other)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn bytes_at_a_quality_interpolate_in_log_bytes_between_the_points_around_it() {
+        let pts = [(4000.0, 0.02), (1000.0, 0.1), (2000.0, 0.05)];
+        match at_quality(&pts, 0.075) {
+            AtQuality::Interpolated(b) => assert!((b - 1000.0 * 2f64.sqrt()).abs() < 1e-6),
+            other => panic!("{other:?}"),
+        }
+        // A measured point exactly at the target is its own bytes.
+        let b = at_quality(&pts, 0.05).bytes().unwrap();
+        assert!((b - 2000.0).abs() < 1e-6, "{b}");
+    }
+
+    #[test]
+    fn bytes_at_a_quality_outside_the_curve_are_a_bound_or_unreached() {
+        let pts = [(1000.0, 0.1), (2000.0, 0.05)];
+        assert_eq!(at_quality(&pts, 0.2), AtQuality::AtMost(1000.0));
+        assert_eq!(at_quality(&pts, 0.01), AtQuality::Unreached);
+        assert_eq!(at_quality(&[], 0.1), AtQuality::Unreached);
+        assert_eq!(
+            at_quality(&[(f64::NAN, 0.0), (0.0, 0.0)], 0.1),
+            AtQuality::Unreached
+        );
+    }
+
+    #[test]
+    fn a_curve_that_is_not_monotone_takes_its_first_crossing() {
+        let pts = [
+            (1000.0, 0.1),
+            (2000.0, 0.04),
+            (3000.0, 0.06),
+            (4000.0, 0.01),
+        ];
+        let b = at_quality(&pts, 0.05).bytes().unwrap();
+        assert!(b > 1000.0 && b < 2000.0, "{b}");
+    }
+}

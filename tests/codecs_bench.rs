@@ -1,0 +1,154 @@
+//! `fovea bench --sweep codecs`: every encoder configuration on the same frames along a gaze
+//! path, scored against the lossless frame. Structure and orderings are asserted, never times.
+
+use std::process::Command;
+use std::sync::atomic::AtomicBool;
+
+use fovea::bench::{codec_configs, run_codecs, write_codec_reports, CodecOptions, TARGET};
+use fovea::protocol::{Codec, Display};
+use fovea::render::Renderer;
+
+#[test]
+fn the_codec_sweep_measures_every_configuration_on_the_same_frames() {
+    let mut renderer = Renderer::new().unwrap_or_else(|e| panic!("GPU tests need an adapter: {e}"));
+    let dir = std::env::temp_dir().join(format!("fovea-codecs-{}", std::process::id()));
+    let opts = CodecOptions {
+        scene: "gallery".into(),
+        width: 320,
+        height: 240,
+        // A saccade across the frame between frames 2 and 3.
+        path: vec![[0.3, 0.4], [0.31, 0.4], [0.7, 0.6], [0.7, 0.61]],
+        recording: "a test path".into(),
+        configs: codec_configs(),
+        display: Display::default(),
+        pictures: Some(dir.join("codecs")),
+    };
+    let report = run_codecs(
+        &mut renderer,
+        &opts,
+        &AtomicBool::new(false),
+        &mut |_, _, _| {},
+    )
+    .expect("the sweep runs");
+    assert_eq!(report.frames, 4);
+    assert_eq!(report.rows.len(), opts.configs.len());
+    let row = |name: &str| {
+        report
+            .rows
+            .iter()
+            .find(|r| r.name == name)
+            .unwrap_or_else(|| {
+                panic!(
+                    "no row {name}: {:?}",
+                    report.rows.iter().map(|r| &r.name).collect::<Vec<_>>()
+                )
+            })
+    };
+    for r in &report.rows {
+        assert!(r.bytes.median > 0.0 && r.kbps > 0.0, "{}", r.name);
+        assert!(r.flip_fovea.is_finite() && r.flip.is_finite(), "{}", r.name);
+        assert!(
+            r.flip_fovea > 0.0 && r.flip_fovea < 0.5,
+            "{} {}",
+            r.name,
+            r.flip_fovea
+        );
+        // Only an H.264 stream has a keyframe, and it costs more than the frames after it.
+        match r.config.codec {
+            Codec::H264 => assert!(r.keyframe_bytes.unwrap() > r.bytes.median, "{}", r.name),
+            _ => assert_eq!(r.keyframe_bytes, None, "{}", r.name),
+        }
+    }
+    // More JPEG quality: more bytes and a better fovea.
+    assert!(row("JPEG q95").bytes.median > row("JPEG q50").bytes.median);
+    assert!(row("JPEG q95").flip_fovea < row("JPEG q50").flip_fovea);
+    // The low-pass spends fewer bytes and leaves the fovea as it was (JPEG blocks at the edge of
+    // the untouched disc may differ a little).
+    let (plain, low) = (row("JPEG q85"), row("JPEG q85 + low-pass"));
+    assert!(low.bytes.median < plain.bytes.median);
+    assert!((low.flip_fovea - plain.flip_fovea).abs() < 0.1 * plain.flip_fovea);
+    assert!(low.flip > plain.flip, "the periphery is blurred");
+    // The floor: 4:2:0 alone costs some quality, truncation more than rounding.
+    assert_eq!(report.floors.len(), 2);
+    assert!(report.floors[0].flip_fovea > 0.0);
+    assert!(report.floors[1].flip_fovea > report.floors[0].flip_fovea);
+    // Every family is read off at the target's quality; the target is itself.
+    let families: Vec<&str> = report
+        .equal_quality
+        .iter()
+        .map(|e| e.family.as_str())
+        .collect();
+    assert_eq!(
+        families,
+        [
+            "JPEG",
+            "H.264",
+            "JPEG + low-pass",
+            "H.264 + low-pass",
+            "JPEG + inset 20°"
+        ]
+    );
+    let jpeg = &report.equal_quality[0];
+    assert!((jpeg.vs_target.unwrap() - 1.0).abs() < 1e-9);
+    assert!(report
+        .markdown()
+        .contains(&format!("At {TARGET}'s foveal quality")));
+
+    write_codec_reports(&report, &dir).unwrap();
+    for f in [
+        "codecs.json",
+        "codecs.md",
+        "codecs.svg",
+        "codecs.png",
+        "codecs/lossless.png",
+        "codecs/JPEG_q85___low_pass.png",
+    ] {
+        assert!(dir.join(f).is_file(), "{f} written");
+    }
+    // `fovea plot` redraws the chart from the JSON.
+    std::fs::remove_file(dir.join("codecs.svg")).unwrap();
+    let out = Command::new(env!("CARGO_BIN_EXE_fovea"))
+        .arg("plot")
+        .arg(dir.join("codecs.json"))
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert!(dir.join("codecs.svg").is_file());
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+#[test]
+fn the_codec_sweep_asks_for_a_gaze_path_and_one_scene() {
+    let run = |args: &[&str]| {
+        let out = Command::new(env!("CARGO_BIN_EXE_fovea"))
+            .args(["bench", "--sweep", "codecs", "--out", "/nonexistent/never"])
+            .args(args)
+            .env_remove("RUST_BACKTRACE")
+            .output()
+            .unwrap();
+        assert!(!out.status.success());
+        String::from_utf8_lossy(&out.stderr).into_owned()
+    };
+    assert!(run(&[]).contains("--gaze-file"));
+    let gaze = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/assets/gaze/eyelink_500hz_1920x1200.csv"
+    );
+    let e = run(&["--gaze-file", gaze, "--scene", "gallery,opaque"]);
+    assert!(e.contains("one scene at one size"), "{e}");
+    let e = run(&["--gaze-file", gaze, "--gaze-from-s=-1"]);
+    assert!(e.contains("--gaze-from-s"), "{e}");
+    let e = run(&[
+        "--gaze-file",
+        gaze,
+        "--screen",
+        "1920x1200",
+        "--gaze-from-s",
+        "100000",
+    ]);
+    assert!(e.contains("no gaze"), "{e}");
+}
