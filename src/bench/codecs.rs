@@ -447,3 +447,73 @@ fn floors(frames: &Frames, viewing: &Viewing) -> Vec<FloorRow> {
     }
     rows
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::gaze::formats::Format;
+    use crate::gaze::Sample;
+
+    fn recording(samples: &[(f64, Option<[f64; 2]>)]) -> Recording {
+        Recording {
+            format: Format::Generic,
+            samples: samples
+                .iter()
+                .map(|&(t_ms, xy)| Sample {
+                    t_ms,
+                    xy,
+                    pupil_mm: None,
+                })
+                .collect(),
+            pupil_rule: None,
+            eye: None,
+            screen: None,
+            saccades: None,
+        }
+    }
+
+    #[test]
+    fn the_path_takes_the_next_sendable_sample_and_holds_the_last_past_the_end() {
+        // Samples at 1000, 1010, 1020 and 1040 ms; the second is lost, the third far off the
+        // frame (replay sends neither).
+        let rec = recording(&[
+            (1000.0, Some([0.1, 0.1])),
+            (1010.0, None),
+            (1020.0, Some([5.0, 5.0])),
+            (1040.0, Some([0.6, 0.4])),
+        ]);
+        let path = gaze_path(&rec, 0.0, 4).unwrap();
+        // Frames at 0, 16.7, 33.3 and 50 ms after the first sample.
+        assert_eq!(path, vec![[0.1, 0.1], [0.6, 0.4], [0.6, 0.4], [0.6, 0.4]]);
+        assert!(matches!(
+            gaze_path(&rec, 1.0, 2),
+            Err(CodecBenchError::NoGaze { .. })
+        ));
+        assert!(gaze_path(&recording(&[]), 0.0, 1).is_err());
+    }
+
+    #[test]
+    fn the_bitrate_spreads_one_keyframe_over_each_two_seconds() {
+        // 120 frames in 2 s: one keyframe of 60 000 bytes and 119 P-frames of 1000.
+        let kbps = kbps_at_fps(&[1000.0, 1000.0], Some(60_000.0));
+        assert!((kbps - (60_000.0 + 119_000.0) * 8.0 / 2.0 / 1e3).abs() < 1e-9);
+        assert!((kbps_at_fps(&[1000.0], None) - 480.0).abs() < 1e-9);
+        assert_eq!(kbps_at_fps(&[], None), 0.0);
+    }
+
+    #[test]
+    fn every_family_has_configurations_named_after_it() {
+        let configs = codec_configs();
+        let names: Vec<&str> = configs.iter().map(|c| c.name.as_str()).collect();
+        for n in [
+            "JPEG q85",
+            "H.264 4000 kbit/s",
+            "JPEG q85 + low-pass",
+            "H.264 500 kbit/s + low-pass",
+            "JPEG q85 + inset 20°",
+        ] {
+            assert!(names.contains(&n), "{n} in {names:?}");
+        }
+        assert_eq!(names.iter().filter(|n| n.contains("inset")).count(), 4);
+    }
+}
