@@ -6,8 +6,7 @@
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};
 
-use serde::{Deserialize, Serialize};
-
+use super::codec_configs::CodecConfig;
 use super::codecs_report::{CodecReport, CodecRow, FloorRow};
 use super::report::{Machine, Spread};
 use crate::encode::foveated::{low_pass, LowPass};
@@ -22,79 +21,6 @@ use crate::viewing::Viewing;
 
 /// The frame rate the gaze path is sampled at and the kbit/s column assumes.
 pub const FPS: f64 = 60.0;
-
-/// How each frame is encoded.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-pub struct CodecConfig {
-    pub name: String,
-    pub codec: Codec,
-    /// JPEG quality (JPEG configurations).
-    pub jpeg_q: u8,
-    /// Target bitrate (H.264 configurations).
-    pub h264_kbps: Option<u32>,
-    /// The eccentricity-matched low-pass before encoding.
-    pub low_pass: bool,
-    /// A downscaled frame plus a foveal inset this many degrees wide (JPEG).
-    pub inset_deg: Option<f64>,
-}
-
-impl CodecConfig {
-    /// The curve a configuration belongs to: the same codec and foveated encoding, varying only
-    /// in quality or bitrate.
-    pub fn family(&self) -> String {
-        let codec = match self.codec {
-            Codec::H264 => "H.264",
-            Codec::Png => "PNG",
-            Codec::Jpeg => "JPEG",
-        };
-        match (self.low_pass, self.inset_deg) {
-            (_, Some(deg)) => format!("{codec} + inset {deg}°"),
-            (true, None) => format!("{codec} + low-pass"),
-            (false, None) => codec.to_string(),
-        }
-    }
-}
-
-/// JPEG q50–95 and H.264 at 500–8000 kbit/s, each plain and low-passed, and JPEG with a 20°
-/// inset: the encoder comparison issue 16 asks for.
-pub fn codec_configs() -> Vec<CodecConfig> {
-    let mut out = Vec::new();
-    let jpeg = |q: u8, low_pass: bool, inset_deg: Option<f64>| CodecConfig {
-        name: String::new(),
-        codec: Codec::Jpeg,
-        jpeg_q: q,
-        h264_kbps: None,
-        low_pass,
-        inset_deg,
-    };
-    for low in [false, true] {
-        for q in [50u8, 75, 85, 95] {
-            out.push(jpeg(q, low, None));
-        }
-        for kbps in [500u32, 1000, 2000, 4000, 8000] {
-            out.push(CodecConfig {
-                h264_kbps: Some(kbps),
-                codec: Codec::H264,
-                ..jpeg(0, low, None)
-            });
-        }
-    }
-    for q in [50u8, 75, 85, 95] {
-        out.push(jpeg(q, false, Some(20.0)));
-    }
-    for c in &mut out {
-        let knob = match c.h264_kbps {
-            Some(k) => format!("{k} kbit/s"),
-            None => format!("q{}", c.jpeg_q),
-        };
-        let family = c.family();
-        c.name = match family.split_once(" + ") {
-            Some((codec, rest)) => format!("{codec} {knob} + {rest}"),
-            None => format!("{family} {knob}"),
-        };
-    }
-    out
-}
 
 #[derive(Debug, Clone)]
 pub struct CodecOptions {
@@ -499,21 +425,5 @@ mod tests {
         assert!((kbps - (60_000.0 + 119_000.0) * 8.0 / 2.0 / 1e3).abs() < 1e-9);
         assert!((kbps_at_fps(&[1000.0], None) - 480.0).abs() < 1e-9);
         assert_eq!(kbps_at_fps(&[], None), 0.0);
-    }
-
-    #[test]
-    fn every_family_has_configurations_named_after_it() {
-        let configs = codec_configs();
-        let names: Vec<&str> = configs.iter().map(|c| c.name.as_str()).collect();
-        for n in [
-            "JPEG q85",
-            "H.264 4000 kbit/s",
-            "JPEG q85 + low-pass",
-            "H.264 500 kbit/s + low-pass",
-            "JPEG q85 + inset 20°",
-        ] {
-            assert!(names.contains(&n), "{n} in {names:?}");
-        }
-        assert_eq!(names.iter().filter(|n| n.contains("inset")).count(), 4);
     }
 }

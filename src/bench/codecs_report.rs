@@ -5,7 +5,7 @@ use std::path::Path;
 
 use serde::{Deserialize, Serialize};
 
-use super::codecs::CodecConfig;
+use super::codec_configs::CodecConfig;
 use super::report::{Machine, Spread};
 
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]

@@ -5,6 +5,7 @@
 //! drift and noise fall on all of them alike; reported times are medians with the 10th–90th
 //! percentile spread, and speedups are ratios against `full` from the same run.
 
+mod codec_configs;
 mod codecs;
 mod codecs_report;
 mod configs;
@@ -12,9 +13,8 @@ mod ground_truth;
 mod report;
 mod run;
 
-pub use codecs::{
-    codec_configs, gaze_path, run_codecs, CodecBenchError, CodecConfig, CodecOptions, FPS,
-};
+pub use codec_configs::{codec_configs, CodecConfig};
+pub use codecs::{gaze_path, run_codecs, CodecBenchError, CodecOptions, FPS};
 pub use codecs_report::{
     at_quality, write_codec_reports, AtQuality, CodecReport, CodecRow, EqualQuality, FloorRow,
     TARGET,
