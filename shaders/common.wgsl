@@ -76,6 +76,9 @@ struct Material {
     // x: the normal map's layer in `materials.linear_maps`, −1 for none; y: its scale;
     // z: the occlusion map's layer (R channel), −1 for none; w: its strength.
     maps: vec4<f32>,
+    // Wrap codes of the base colour, normal and occlusion maps: u's mode in bits 0-1, v's in
+    // bits 2-3; 0 repeat, 1 clamp to edge, 2 mirrored repeat (CPU twin: scene::sampling).
+    wrap: vec4<u32>,
     // The specular lobe's directional albedo split E(μ) = F0·A + F90·B at LOBE_TABLE values
     // of μ: entry i is (A, B) in lobe[i / 2].xy (even i) or .zw (odd i).
     lobe: array<vec4<f32>, 8>,

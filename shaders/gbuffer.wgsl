@@ -7,6 +7,34 @@
 @group(0) @binding(3) var material_sampler: sampler;
 // Tangent-space normal maps (linear), one layer each.
 @group(0) @binding(4) var linear_maps: texture_2d_array<f32>;
+// The same filtering with the other wrap modes, per axis (u then v; r repeat, c clamp to edge,
+// m mirrored repeat): the sampler does the folding, as a GPU's does it exactly.
+@group(0) @binding(5) var sampler_cr: sampler;
+@group(0) @binding(6) var sampler_mr: sampler;
+@group(0) @binding(7) var sampler_rc: sampler;
+@group(0) @binding(8) var sampler_cc: sampler;
+@group(0) @binding(9) var sampler_mc: sampler;
+@group(0) @binding(10) var sampler_rm: sampler;
+@group(0) @binding(11) var sampler_cm: sampler;
+@group(0) @binding(12) var sampler_mm: sampler;
+
+// A map read through the sampler its wrap code names (scene::sampling::Sampling::code: u's
+// mode in bits 0-1, v's in bits 2-3; 0 repeat, 1 clamp, 2 mirror). Mip levels come from the
+// caller's derivatives, taken before anything branches.
+fn sample_map(t: texture_2d_array<f32>, uv: vec2<f32>, layer: f32, code: u32, ddx: vec2<f32>, ddy: vec2<f32>) -> vec4<f32> {
+    let l = i32(max(layer, 0.0));
+    switch code {
+        case 1u: { return textureSampleGrad(t, sampler_cr, uv, l, ddx, ddy); }
+        case 2u: { return textureSampleGrad(t, sampler_mr, uv, l, ddx, ddy); }
+        case 4u: { return textureSampleGrad(t, sampler_rc, uv, l, ddx, ddy); }
+        case 5u: { return textureSampleGrad(t, sampler_cc, uv, l, ddx, ddy); }
+        case 6u: { return textureSampleGrad(t, sampler_mc, uv, l, ddx, ddy); }
+        case 8u: { return textureSampleGrad(t, sampler_rm, uv, l, ddx, ddy); }
+        case 9u: { return textureSampleGrad(t, sampler_cm, uv, l, ddx, ddy); }
+        case 10u: { return textureSampleGrad(t, sampler_mm, uv, l, ddx, ddy); }
+        default: { return textureSampleGrad(t, material_sampler, uv, l, ddx, ddy); }
+    }
+}
 
 struct VertexOut {
     @builtin(position) clip: vec4<f32>,
@@ -59,9 +87,11 @@ fn fs_main(in: VertexOut, @builtin(front_facing) front: bool) -> GBuffer {
     let m = materials[in.material];
     // Sampled before anything branches, so the mip level's derivatives are defined.
     let layer = m.surface.w;
-    let texel = textureSample(material_textures, material_sampler, in.uv.xy, i32(max(layer, 0.0)));
-    let bump = textureSample(linear_maps, material_sampler, in.uv.zw, i32(max(m.maps.x, 0.0)));
-    let occluded = textureSample(linear_maps, material_sampler, in.uv.zw, i32(max(m.maps.z, 0.0))).r;
+    let dx = dpdx(in.uv);
+    let dy = dpdy(in.uv);
+    let texel = sample_map(material_textures, in.uv.xy, layer, m.wrap.x, dx.xy, dy.xy);
+    let bump = sample_map(linear_maps, in.uv.zw, m.maps.x, m.wrap.y, dx.zw, dy.zw);
+    let occluded = sample_map(linear_maps, in.uv.zw, m.maps.z, m.wrap.z, dx.zw, dy.zw).r;
     if (!front && m.double_sided == 0u) {
         discard;
     }

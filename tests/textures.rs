@@ -35,6 +35,17 @@ fn png_row(colours: &[[u8; 3]]) -> Vec<u8> {
 /// (0,0), TEXCOORD_1 the same mirrored in u) whose material `material` may use texture 0, the
 /// image `row`; loaded as scene `name`.
 fn quad(name: &str, corners: [[f32; 3]; 4], material: serde_json::Value, row: &[[u8; 3]]) -> Scene {
+    quad_sampled(name, corners, material, row, json!({}))
+}
+
+/// [`quad`] with its texture read through `sampler` (a glTF sampler object).
+fn quad_sampled(
+    name: &str,
+    corners: [[f32; 3]; 4],
+    material: serde_json::Value,
+    row: &[[u8; 3]],
+    sampler: serde_json::Value,
+) -> Scene {
     let mut bin = Vec::new();
     for c in corners.iter().flatten() {
         bin.extend_from_slice(&c.to_le_bytes());
@@ -73,7 +84,7 @@ fn quad(name: &str, corners: [[f32; 3]; 4], material: serde_json::Value, row: &[
             {"bufferView": 4, "componentType": 5126, "count": 4, "type": "VEC2"}
         ],
         "images": [{"bufferView": 3, "mimeType": "image/png"}],
-        "samplers": [{}],
+        "samplers": [sampler],
         "textures": [{"source": 0, "sampler": 0}],
         "materials": [material],
         "meshes": [{"primitives": [{"attributes": {"POSITION": 0, "TEXCOORD_0": 1, "TEXCOORD_1": 3}, "indices": 2, "material": 0}]}],
@@ -258,4 +269,75 @@ fn an_occlusion_map_dims_the_ambient_light_only() {
             "an unoccluded map changes nothing: {o} vs {p}"
         );
     }
+}
+
+/// The red share r / (r + b) of each covered pixel along the middle row, left to right.
+fn red_share_along_the_middle(img: &Inspection, w: u32, h: u32) -> Vec<f32> {
+    let row = (h / 2 * w) as usize;
+    (row..row + w as usize)
+        .filter(|&k| img.normal_distance[k][3] > 0.0)
+        .map(|k| img.color[k][0] / (img.color[k][0] + img.color[k][2]).max(1e-6))
+        .collect()
+}
+
+#[test]
+fn wrap_modes_repeat_clamp_or_mirror_the_texture_beyond_its_edge() {
+    // u runs 0 → 3 across the quad over an image that is red on its left half, blue on its
+    // right: repeat shows R B R B R B, clamp R B then the edge texel's blue, mirror R B B R R B.
+    let material = json!({"pbrMetallicRoughness": {"baseColorTexture": {"index": 0,
+        "extensions": {"KHR_texture_transform": {"scale": [3, 1]}}},
+        "metallicFactor": 0.0, "roughnessFactor": 1.0}});
+    let (w, h) = (320, 200);
+    let changes = |wrap: u32| {
+        let sampler = json!({"wrapS": wrap, "wrapT": 33071});
+        let scene = quad_sampled(
+            "wrapped",
+            FACING_Z,
+            material.clone(),
+            &red_then_blue(),
+            sampler,
+        );
+        let shares = red_share_along_the_middle(&render(scene, w, h), w, h);
+        assert!(shares.len() > 80, "{} pixels", shares.len());
+        // Colour changes, counted with hysteresis so a filtered edge counts once.
+        let mut red = shares[0] > 0.5;
+        let mut n = 0;
+        for s in &shares {
+            if (red && *s < 0.3) || (!red && *s > 0.7) {
+                red = !red;
+                n += 1;
+            }
+        }
+        (n, shares[0] > 0.5, *shares.last().unwrap() > 0.5)
+    };
+    assert_eq!(changes(10497), (5, true, false), "REPEAT");
+    assert_eq!(changes(33071), (1, true, false), "CLAMP_TO_EDGE");
+    assert_eq!(changes(33648), (3, true, false), "MIRRORED_REPEAT");
+}
+
+#[test]
+fn a_nearest_magnified_texture_keeps_its_texels_square() {
+    // Two texels stretched over the whole quad: filtered, the middle is a long red-to-blue
+    // ramp; NEAREST (9728), a sharp edge.
+    let material = json!({"pbrMetallicRoughness": {"baseColorTexture": {"index": 0},
+        "metallicFactor": 0.0, "roughnessFactor": 1.0}});
+    let (w, h) = (320, 200);
+    let blended = |sampler: serde_json::Value, nearest: bool| {
+        let scene = quad_sampled(
+            "pixel-art",
+            FACING_Z,
+            material.clone(),
+            &[[255, 0, 0], [0, 0, 255]],
+            sampler,
+        );
+        assert_eq!(scene.textures[0].sampling.nearest, nearest);
+        let shares = red_share_along_the_middle(&render(scene, w, h), w, h);
+        assert!(shares.len() > 80, "{} pixels", shares.len());
+        shares.iter().filter(|s| (0.3..0.7).contains(*s)).count()
+    };
+    let linear = blended(json!({"magFilter": 9729}), false);
+    let nearest = blended(json!({"magFilter": 9728}), true);
+    eprintln!("mixed pixels: linear {linear}, nearest {nearest}");
+    assert!(linear >= 15, "a filtered ramp: {linear} mixed pixels");
+    assert!(nearest <= 3, "a sharp edge: {nearest} mixed pixels");
 }

@@ -22,6 +22,9 @@ pub struct GpuMaterial {
     pub surface: [f32; 4],
     /// Normal map layer (−1: none), its scale, occlusion map layer (−1: none), its strength.
     pub maps: [f32; 4],
+    /// Wrap codes (`scene::sampling::Sampling::code`) of the base colour, normal and
+    /// occlusion maps.
+    pub wrap: [u32; 4],
     /// The lobe's directional-albedo table, two (A, B) entries per vec4.
     pub lobe: [[f32; 4]; ALBEDO_TABLE / 2],
 }
@@ -72,6 +75,18 @@ pub fn gpu_materials(scene: &Scene, plan: Option<&Plan>) -> Vec<GpuMaterial> {
                 .flatten()
                 .map_or((-1.0, 0.0), |(layer, k)| (layer as f32, k));
             let maps = [normal, scale, occlusion, strength];
+            let code = |images: &[crate::scene::TextureImage], layer: f32| {
+                (layer >= 0.0)
+                    .then(|| images.get(layer as usize))
+                    .flatten()
+                    .map_or(0, |t| t.sampling.code())
+            };
+            let wrap = [
+                code(&scene.textures, surface[3]),
+                code(&scene.linear_maps, normal),
+                code(&scene.linear_maps, occlusion),
+                0,
+            ];
             match m {
                 Material::Opaque { .. } => GpuMaterial {
                     albedo: rgba(albedo),
@@ -79,6 +94,7 @@ pub fn gpu_materials(scene: &Scene, plan: Option<&Plan>) -> Vec<GpuMaterial> {
                     double_sided,
                     surface,
                     maps,
+                    wrap,
                     lobe,
                     ..Default::default()
                 },
@@ -89,6 +105,7 @@ pub fn gpu_materials(scene: &Scene, plan: Option<&Plan>) -> Vec<GpuMaterial> {
                     double_sided,
                     surface,
                     maps,
+                    wrap,
                     lobe,
                     albedo: rgba(albedo),
                     sigma_tr: rgba(dipole.map(|d| d.sigma_tr)),
@@ -136,7 +153,7 @@ mod tests {
     fn gpu_material_matches_the_wgsl_struct_size() {
         assert_eq!(
             std::mem::size_of::<super::GpuMaterial>(),
-            16 + 7 * 16 + 8 * 16
+            16 + 8 * 16 + 8 * 16
         );
     }
 }

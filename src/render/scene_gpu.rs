@@ -94,10 +94,12 @@ impl SceneGpu {
         };
         resources.buffer("photons.nodes", nodes);
         resources.buffer("lights.scene", super::lights::upload(device, &scene));
-        let (textures, linear_maps, sampler) = super::textures::upload(device, queue, &scene);
+        let (textures, linear_maps, samplers) = super::textures::upload(device, queue, &scene);
         resources.texture_array("materials.textures", textures);
         resources.texture_array("materials.linear_maps", linear_maps);
-        resources.sampler("materials.sampler", sampler);
+        for (name, sampler) in super::textures::SAMPLERS.into_iter().zip(samplers) {
+            resources.sampler(name, sampler);
+        }
         resources.buffer("materials.scene", materials);
         tracing::info!(scene = %scene.name(), triangles = scene.mesh.triangle_count(), translucent = scene.has_translucency(), "scene loaded");
         let radiosity = start_radiosity(&scene);

@@ -16,6 +16,7 @@ mod model;
 mod obj;
 pub mod plan;
 mod ply;
+pub mod sampling;
 
 pub use build::MAX_MATERIALS;
 pub use camera::Camera;
@@ -86,12 +87,13 @@ pub enum SceneError {
     Invalid { scene: String, message: String },
 }
 
-/// A base colour texture: sRGB-encoded RGBA8, row by row.
+/// A texture: RGBA8 row by row (sRGB-encoded for base colour maps), and how it is sampled.
 #[derive(Debug, Clone, PartialEq)]
 pub struct TextureImage {
     pub width: u32,
     pub height: u32,
     pub rgba: Vec<u8>,
+    pub sampling: sampling::Sampling,
 }
 
 /// Where an object's vertices sit in the combined mesh, and for a quad its lattice.

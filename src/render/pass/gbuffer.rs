@@ -4,6 +4,7 @@
 use wgpu::util::DeviceExt;
 
 use crate::render::graph::{read, sampler, texture_array, uniform, GraphError, PassDecl, Recorder};
+use crate::render::textures::SAMPLERS;
 use crate::scene::Scene;
 
 pub const NORMAL_DISTANCE: wgpu::TextureFormat = wgpu::TextureFormat::Rgba32Float;
@@ -70,6 +71,14 @@ pub const PASS: PassDecl = PassDecl {
         texture_array("materials.textures"),
         sampler("materials.sampler"),
         texture_array("materials.linear_maps"),
+        sampler(SAMPLERS[1]),
+        sampler(SAMPLERS[2]),
+        sampler(SAMPLERS[3]),
+        sampler(SAMPLERS[4]),
+        sampler(SAMPLERS[5]),
+        sampler(SAMPLERS[6]),
+        sampler(SAMPLERS[7]),
+        sampler(SAMPLERS[8]),
     ],
     attachments: &[
         "gbuffer.normal_distance",

@@ -439,7 +439,10 @@ impl Textures {
                     gltf::image::Source::Uri { uri, .. } => read_uri(uri, base, folder),
                 };
                 match bytes.and_then(|b| texture::decode(&b)) {
-                    Ok(t) => Some(t),
+                    Ok(mut img) => {
+                        img.sampling = crate::scene::sampling::Sampling::of_gltf(&t.sampler());
+                        Some(img)
+                    }
                     Err(e) => {
                         notes.push(format!(
                             "texture {}: {e}; its factor is used alone",

@@ -23,6 +23,7 @@ pub fn decode(bytes: &[u8]) -> Result<TextureImage, String> {
         width,
         height,
         rgba: img.into_raw(),
+        sampling: Default::default(),
     })
 }
 
