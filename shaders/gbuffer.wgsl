@@ -18,11 +18,22 @@
 @group(0) @binding(11) var sampler_cm: sampler;
 @group(0) @binding(12) var sampler_mm: sampler;
 
+// True in the pipeline of a scene with a map that clamps or mirrors. Off, every map repeats and
+// the switch below is compiled out: on the software adapter its nine sampling branches cost
+// the G-buffer 3-4x even when no pixel takes them.
+override WRAP_MODES: bool = false;
+
 // A map read through the sampler its wrap code names (scene::sampling::Sampling::code: u's
-// mode in bits 0-1, v's in bits 2-3; 0 repeat, 1 clamp, 2 mirror). Mip levels come from the
-// caller's derivatives, taken before anything branches.
+// mode in bits 0-1, v's in bits 2-3; 0 repeat, 1 clamp, 2 mirror); white where there is no map
+// (layer < 0). Mip levels come from the caller's derivatives, taken before anything branches.
 fn sample_map(t: texture_2d_array<f32>, uv: vec2<f32>, layer: f32, code: u32, ddx: vec2<f32>, ddy: vec2<f32>) -> vec4<f32> {
-    let l = i32(max(layer, 0.0));
+    if (layer < 0.0) {
+        return vec4<f32>(1.0);
+    }
+    let l = i32(layer);
+    if (!WRAP_MODES || code == 0u) {
+        return textureSampleGrad(t, material_sampler, uv, l, ddx, ddy);
+    }
     switch code {
         case 1u: { return textureSampleGrad(t, sampler_cr, uv, l, ddx, ddy); }
         case 2u: { return textureSampleGrad(t, sampler_mr, uv, l, ddx, ddy); }

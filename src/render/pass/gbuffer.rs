@@ -3,7 +3,9 @@
 
 use wgpu::util::DeviceExt;
 
-use crate::render::graph::{read, sampler, texture_array, uniform, GraphError, PassDecl, Recorder};
+use crate::render::graph::{
+    read, sampler, texture_array, uniform, BuildRender, GraphError, PassDecl, Recorder,
+};
 use crate::render::textures::SAMPLERS;
 use crate::scene::Scene;
 
@@ -59,6 +61,8 @@ pub struct MeshBuffers {
     pub index_count: u32,
     /// `GiVertex` per vertex; zeros until (and unless) radiosity writes it.
     pub gi: wgpu::Buffer,
+    /// Some texture clamps or mirrors: the G-buffer takes its wrap-mode pipeline.
+    pub wrap_modes: bool,
 }
 
 pub const PASS: PassDecl = PassDecl {
@@ -90,6 +94,13 @@ pub const PASS: PassDecl = PassDecl {
     entry_points: &["vs_main", "fs_main"],
 };
 
+/// The G-buffer of a scene with a map that clamps or mirrors: the same pass with the shader's
+/// `WRAP_MODES` on (its own label only so the pipeline caches keep the two apart).
+pub const PASS_WRAPPED: PassDecl = PassDecl {
+    label: "gbuffer (wrap modes)",
+    ..PASS
+};
+
 fn pipeline(
     device: &wgpu::Device,
     layout: &wgpu::BindGroupLayout,
@@ -98,7 +109,24 @@ fn pipeline(
     let targets = [NORMAL_DISTANCE, ALBEDO, BLURRED_NORMAL, IRRADIANCE];
     // No culling here: the fragment shader culls per material (double-sided ones keep their
     // back faces).
-    mesh_pipeline(device, PASS.label, layout, module, &targets, None)
+    mesh_pipeline(device, PASS.label, layout, module, &targets, None, &[])
+}
+
+fn pipeline_wrapped(
+    device: &wgpu::Device,
+    layout: &wgpu::BindGroupLayout,
+    module: &wgpu::ShaderModule,
+) -> wgpu::RenderPipeline {
+    let targets = [NORMAL_DISTANCE, ALBEDO, BLURRED_NORMAL, IRRADIANCE];
+    mesh_pipeline(
+        device,
+        PASS_WRAPPED.label,
+        layout,
+        module,
+        &targets,
+        None,
+        &[("WRAP_MODES", 1.0)],
+    )
 }
 
 /// A pipeline that rasterises the scene mesh (`vs_main`/`fs_main`, the mesh and radiosity
@@ -110,6 +138,7 @@ pub fn mesh_pipeline(
     module: &wgpu::ShaderModule,
     targets: &[wgpu::TextureFormat],
     cull_mode: Option<wgpu::Face>,
+    fragment_constants: &[(&str, f64)],
 ) -> wgpu::RenderPipeline {
     let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
         label: Some(label),
@@ -144,7 +173,10 @@ pub fn mesh_pipeline(
         fragment: Some(wgpu::FragmentState {
             module,
             entry_point: Some("fs_main"),
-            compilation_options: Default::default(),
+            compilation_options: wgpu::PipelineCompilationOptions {
+                constants: fragment_constants,
+                ..Default::default()
+            },
             targets: &targets,
         }),
         multiview_mask: None,
@@ -154,8 +186,13 @@ pub fn mesh_pipeline(
 
 /// Rasterises `mesh` into the G-buffer targets.
 pub fn record(f: &mut Recorder, mesh: &MeshBuffers) -> Result<(), GraphError> {
-    let pipeline = f.pipelines.render(&PASS, pipeline);
-    let bind_group = f.bind_group(&PASS)?;
+    let (decl, build): (&PassDecl, BuildRender) = if mesh.wrap_modes {
+        (&PASS_WRAPPED, pipeline_wrapped)
+    } else {
+        (&PASS, pipeline)
+    };
+    let pipeline = f.pipelines.render(decl, build);
+    let bind_group = f.bind_group(decl)?;
     let view = |name| f.view(name).cloned();
     let (nd, albedo, blurred, irradiance, depth) = (
         view("gbuffer.normal_distance")?,
@@ -260,5 +297,10 @@ pub fn upload(device: &wgpu::Device, scene: &Scene) -> MeshBuffers {
         indices,
         index_count: mesh.indices.len() as u32,
         gi,
+        wrap_modes: scene
+            .textures
+            .iter()
+            .chain(&scene.linear_maps)
+            .any(|t| t.sampling.code() != 0),
     }
 }

@@ -89,7 +89,7 @@ fn raster_pipeline(device: &wgpu::Device, pipelines: &mut Pipelines) -> wgpu::Re
         IRRADIANCE,
     ];
     // Both faces: the light may see an object's inside through an open mesh.
-    mesh_pipeline(device, PASS.label, &layout, &module, &targets, None)
+    mesh_pipeline(device, PASS.label, &layout, &module, &targets, None, &[])
 }
 
 /// The photon and pyramid pipelines (shared by every scene).

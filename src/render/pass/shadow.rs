@@ -106,6 +106,7 @@ fn pipeline(
         module,
         &[wgpu::TextureFormat::R32Float],
         None,
+        &[],
     )
 }
 
