@@ -337,29 +337,42 @@ fn save(
     std::fs::write(&path, png).map_err(|e| fail(e.to_string()))
 }
 
+/// How a floor row converts: ours rounded, shown with each chroma sample over its block or
+/// filtered between blocks; openh264's truncating conversion.
+enum Floor {
+    Rounded,
+    Filtered,
+    Truncated,
+}
+
 /// The floor under every codec that codes 8-bit 4:2:0 YCbCr: the colour conversion alone,
 /// rounded (ours, and a browser's decoder) and truncated (openh264's own), no compression.
 fn floors(frames: &Frames, viewing: &Viewing) -> Vec<FloorRow> {
     let (w, h) = (viewing.width as usize, viewing.height as usize);
     let mut rows = Vec::new();
-    for (name, rounded) in [
-        ("I420 round trip, rounded (no codec)", true),
+    for (name, conversion) in [
+        ("I420 round trip, rounded (no codec)", Floor::Rounded),
+        (
+            "I420 round trip, rounded, chroma filtered when shown (no codec)",
+            Floor::Filtered,
+        ),
         (
             "I420 round trip, truncated as openh264 converts (no codec)",
-            false,
+            Floor::Truncated,
         ),
     ] {
         let (mut fov, mut whole) = (Vec::new(), Vec::new());
         for (g, rgba) in frames {
-            let back = if rounded {
-                let mut pic = yuv::I420::new(w, h);
-                pic.fill(rgba);
-                yuv::picture_to_rgba(&pic)
-            } else {
-                let pic = openh264::formats::YUVBuffer::from_rgba8_source(
-                    openh264::formats::RgbaSliceU8::new(rgba, (w, h)),
-                );
-                yuv::picture_to_rgba(&pic)
+            let mut pic = yuv::I420::new(w, h);
+            pic.fill(rgba);
+            let back = match conversion {
+                Floor::Rounded => yuv::picture_to_rgba(&pic),
+                Floor::Filtered => yuv::picture_to_rgba_filtered(&pic),
+                Floor::Truncated => {
+                    yuv::picture_to_rgba(&openh264::formats::YUVBuffer::from_rgba8_source(
+                        openh264::formats::RgbaSliceU8::new(rgba, (w, h)),
+                    ))
+                }
             };
             let (f, a) = score(viewing, rgba, &back, *g);
             fov.push(f);

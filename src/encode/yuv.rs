@@ -102,28 +102,81 @@ pub fn rgba_to_i420(
 /// A decoded picture (any strides) as RGBA, rounded as `i420_to_rgba`.
 pub fn picture_to_rgba(pic: &impl openh264::formats::YUVSource) -> Vec<u8> {
     let (w, h) = pic.dimensions();
+    let (y, u, v) = planes(pic);
+    i420_to_rgba(&y, &u, &v, w, h)
+}
+
+/// A decoded picture as RGBA, chroma filtered as `i420_to_rgba_filtered`.
+pub fn picture_to_rgba_filtered(pic: &impl openh264::formats::YUVSource) -> Vec<u8> {
+    let (w, h) = pic.dimensions();
+    let (y, u, v) = planes(pic);
+    i420_to_rgba_filtered(&y, &u, &v, w, h)
+}
+
+/// A picture's planes, tightly packed.
+fn planes(pic: &impl openh264::formats::YUVSource) -> (Vec<u8>, Vec<u8>, Vec<u8>) {
+    let (w, h) = pic.dimensions();
     let (ys, us, vs) = pic.strides();
     let rows = |plane: &[u8], stride: usize, width: usize, height: usize| -> Vec<u8> {
         (0..height)
             .flat_map(|j| plane[j * stride..j * stride + width].iter().copied())
             .collect()
     };
-    let y = rows(pic.y(), ys, w, h);
-    let u = rows(pic.u(), us, w / 2, h / 2);
-    let v = rows(pic.v(), vs, w / 2, h / 2);
-    i420_to_rgba(&y, &u, &v, w, h)
+    (
+        rows(pic.y(), ys, w, h),
+        rows(pic.u(), us, w / 2, h / 2),
+        rows(pic.v(), vs, w / 2, h / 2),
+    )
 }
 
-/// The inverse, for tests and measurements (what a BT.601 limited-range decoder shows).
+/// The inverse, for tests and measurements (what a BT.601 limited-range decoder shows), each
+/// chroma sample repeated over its 2×2 block.
 pub fn i420_to_rgba(y: &[u8], u: &[u8], v: &[u8], width: usize, height: usize) -> Vec<u8> {
     let hw = width / 2;
+    to_rgba(y, width, height, |px, py| {
+        let c = (py / 2) * hw + px / 2;
+        (f32::from(u[c]), f32::from(v[c]))
+    })
+}
+
+/// The inverse with chroma interpolated bilinearly between block centres (where
+/// `rgba_to_i420` takes each block's mean), as a decoder that filters its chroma shows it.
+pub fn i420_to_rgba_filtered(y: &[u8], u: &[u8], v: &[u8], width: usize, height: usize) -> Vec<u8> {
+    let (hw, hh) = (width / 2, height / 2);
+    // Block centre i sits at luma coordinate 2i + 0.5: pixel x reads chroma at (x − 0.5)/2.
+    let taps = |x: usize, n: usize| {
+        let last = n.max(1) - 1;
+        let c = ((x as f32 - 0.5) * 0.5).clamp(0.0, last as f32);
+        let i = (c.floor() as usize).min(last);
+        (i, (i + 1).min(last), c - i as f32)
+    };
+    to_rgba(y, width, height, |px, py| {
+        let (x0, x1, fx) = taps(px, hw);
+        let (y0, y1, fy) = taps(py, hh);
+        let at = |plane: &[u8]| {
+            let p = |i: usize, j: usize| f32::from(plane[j * hw + i]);
+            let top = p(x0, y0) + fx * (p(x1, y0) - p(x0, y0));
+            let bottom = p(x0, y1) + fx * (p(x1, y1) - p(x0, y1));
+            top + fy * (bottom - top)
+        };
+        (at(u), at(v))
+    })
+}
+
+/// BT.601 limited range to RGBA, rounded, with each pixel's (Cb, Cr) codes from `chroma`.
+fn to_rgba(
+    y: &[u8],
+    width: usize,
+    height: usize,
+    chroma: impl Fn(usize, usize) -> (f32, f32),
+) -> Vec<u8> {
     let mut out = Vec::with_capacity(width * height * 4);
     for py in 0..height {
         for px in 0..width {
             let l = (f32::from(y[py * width + px]) - 16.0) * (255.0 / 219.0);
-            let c = (py / 2) * hw + px / 2;
-            let cb = (f32::from(u[c]) - 128.0) * (255.0 / 224.0 * 1.772);
-            let cr = (f32::from(v[c]) - 128.0) * (255.0 / 224.0 * 1.402);
+            let (u, v) = chroma(px, py);
+            let cb = (u - 128.0) * (255.0 / 224.0 * 1.772);
+            let cr = (v - 128.0) * (255.0 / 224.0 * 1.402);
             let (r, b) = (l + cr, l + cb);
             let g = (l - 0.299 * r - 0.114 * b) / 0.587;
             out.extend([r, g, b].map(|x| (x + 0.5).clamp(0.0, 255.0) as u8));
@@ -198,5 +251,37 @@ mod tests {
             .sum::<f64>()
             / (w * h * 3) as f64;
         assert!(bias.abs() < 0.1, "mean error {bias}");
+    }
+
+    #[test]
+    fn filtered_chroma_agrees_on_flat_colour_and_ramps_across_a_colour_edge() {
+        let (w, h) = (8, 4);
+        // Left half red, right half blue: one chroma edge between blocks 1 and 2.
+        let rgba: Vec<u8> = (0..w * h)
+            .flat_map(|i| {
+                if i % w < 4 {
+                    [200u8, 30, 30, 255]
+                } else {
+                    [30, 30, 200, 255]
+                }
+            })
+            .collect();
+        let (y, u, v) = convert(&rgba, w, h);
+        let nearest = i420_to_rgba(&y, &u, &v, w, h);
+        let filtered = i420_to_rgba_filtered(&y, &u, &v, w, h);
+        // Far from the edge both are the same; next to it the filtered one blends.
+        for x in [0, 7] {
+            assert_eq!(
+                &nearest[x * 4..x * 4 + 3],
+                &filtered[x * 4..x * 4 + 3],
+                "x {x}"
+            );
+        }
+        let red_at = |img: &[u8], x: usize| img[x * 4];
+        assert!(red_at(&filtered, 3) < red_at(&nearest, 3));
+        assert!(red_at(&filtered, 4) > red_at(&nearest, 4));
+        // Odd sizes of one block and edge blocks stay in range.
+        let one = i420_to_rgba_filtered(&[100; 4], &[128], &[128], 2, 2);
+        assert_eq!(one.len(), 16);
     }
 }
