@@ -1,5 +1,5 @@
 // RGB → I420 for H.264 sessions (CPU twin: src/encode/yuv.rs rgba_to_i420): the output image's
-// packed sRGB RGBA8 to BT.601 limited-range Y, U and V planes, rounded to nearest, chroma from
+// packed sRGB RGBA8 to BT.601 full-range Y, U and V planes, rounded to nearest, chroma from
 // each 2×2 block's mean RGB. Read back instead of the RGBA image: 1.5 bytes a pixel, not 4.
 //
 // `output.i420` holds the Y plane (w·h bytes), then U and V, each padded to whole words:
@@ -31,8 +31,8 @@ fn chroma(c: u32, width: u32) -> vec2<u32> {
     let m = (rgb_at(i) + rgb_at(i + 1u) + rgb_at(i + width) + rgb_at(i + width + 1u)) * 0.25;
     let l = luma(m);
     return vec2<u32>(
-        code(128.0 + (m.b - l) * (224.0 / 255.0 / 1.772)),
-        code(128.0 + (m.r - l) * (224.0 / 255.0 / 1.402)),
+        code(128.0 + (m.b - l) / 1.772),
+        code(128.0 + (m.r - l) / 1.402),
     );
 }
 
@@ -47,7 +47,7 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
     if (k < y_words) {
         var word = 0u;
         for (var j = 0u; j < 4u; j++) {
-            word |= code(16.0 + luma(rgb_at(4u * k + j)) * (219.0 / 255.0)) << (8u * j);
+            word |= code(luma(rgb_at(4u * k + j))) << (8u * j);
         }
         planes[k] = word;
     }

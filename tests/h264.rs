@@ -9,7 +9,6 @@ use fovea::encode::h264::{H264Config, H264Stream};
 use fovea::protocol::{Ack, Codec, ErrorCode, Gaze, Hello};
 use fovea::render::{FrameRequest, Renderer};
 use openh264::decoder::Decoder;
-use openh264::formats::YUVSource;
 
 mod common;
 
@@ -29,9 +28,8 @@ fn decode(decoder: &mut Decoder, bytes: &[u8]) -> Vec<u8> {
         .decode(bytes)
         .expect("decodes")
         .expect("a picture per frame: nothing is held back");
-    let (w, h) = yuv.dimensions();
-    let mut rgba = vec![0; w * h * 4];
-    yuv.write_rgba8(&mut rgba);
+    // Full range, as the stream's VUI says (openh264's own `write_rgba8` assumes limited).
+    let rgba = fovea::encode::yuv::picture_to_rgba(&yuv);
     rgba
 }
 

@@ -337,16 +337,15 @@ fn save(
     std::fs::write(&path, png).map_err(|e| fail(e.to_string()))
 }
 
-/// How a floor row converts: ours rounded, shown with each chroma sample over its block or
-/// filtered between blocks; openh264's truncating conversion.
+/// How a floor row shows our conversion: each chroma sample over its block, or filtered
+/// between blocks.
 enum Floor {
     Rounded,
     Filtered,
-    Truncated,
 }
 
-/// The floor under every codec that codes 8-bit 4:2:0 YCbCr: the colour conversion alone,
-/// rounded (ours, and a browser's decoder) and truncated (openh264's own), no compression.
+/// The floor under every codec that codes 8-bit 4:2:0 YCbCr: our colour conversion alone, no
+/// compression.
 fn floors(frames: &Frames, viewing: &Viewing) -> Vec<FloorRow> {
     let (w, h) = (viewing.width as usize, viewing.height as usize);
     let mut rows = Vec::new();
@@ -356,10 +355,6 @@ fn floors(frames: &Frames, viewing: &Viewing) -> Vec<FloorRow> {
             "I420 round trip, rounded, chroma filtered when shown (no codec)",
             Floor::Filtered,
         ),
-        (
-            "I420 round trip, truncated as openh264 converts (no codec)",
-            Floor::Truncated,
-        ),
     ] {
         let (mut fov, mut whole) = (Vec::new(), Vec::new());
         for (g, rgba) in frames {
@@ -368,11 +363,6 @@ fn floors(frames: &Frames, viewing: &Viewing) -> Vec<FloorRow> {
             let back = match conversion {
                 Floor::Rounded => yuv::picture_to_rgba(&pic),
                 Floor::Filtered => yuv::picture_to_rgba_filtered(&pic),
-                Floor::Truncated => {
-                    yuv::picture_to_rgba(&openh264::formats::YUVBuffer::from_rgba8_source(
-                        openh264::formats::RgbaSliceU8::new(rgba, (w, h)),
-                    ))
-                }
             };
             let (f, a) = score(viewing, rgba, &back, *g);
             fov.push(f);

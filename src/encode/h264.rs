@@ -3,7 +3,7 @@
 //! arrives), a keyframe at the start, on request, after a size change and every
 //! `keyframe_every`, constant bitrate.
 //!
-//! Frames are converted from RGBA by `encode::yuv` (BT.601 limited range, rounded; openh264's own
+//! Frames are converted from RGBA by `encode::yuv` (BT.601 full range, rounded; openh264's own
 //! converter truncates, which FLIP counts) and the
 //! stream's VUI says so, so decoders turn them back into the same colours. openh264 built
 //! from source (the default) is not covered by Cisco's patent licence; building with the
@@ -152,7 +152,8 @@ impl H264Stream {
                 .background_detection(false)
                 .adaptive_quantization(false)
                 .num_threads(1)
-                .vui(VuiConfig::bt601());
+                // Full range, as `encode::yuv` converts: the decoder must know.
+                .vui(VuiConfig::bt601().full_range(true));
             let encoder = Encoder::with_api_config(api()?, config)
                 .map_err(|e| EncodeError::H264(e.to_string()))?;
             self.encoder = Some(encoder);

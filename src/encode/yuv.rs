@@ -1,12 +1,14 @@
-//! RGB → I420 (BT.601, limited range, 4:2:0) for the H.264 encoder, rounded to nearest.
+//! RGB → I420 (BT.601, full range, 4:2:0) for the H.264 encoder, rounded to nearest.
 //!
 //! openh264's own converter truncates every sample towards zero: half a code value lost on
 //! average in each of Y, U and V, a bias and banding that FLIP counts. Measured on a 1280×720
 //! `gallery` frame, the round trip RGB → I420 → RGB alone (no encoding) scored foveal FLIP
 //! 0.056 with truncation and 0.032 rounded, the same conversion otherwise (`docs/encoding.md`).
 //!
-//! Y = 16 + 219·(0.299 R + 0.587 G + 0.114 B)/255; Cb, Cr = 128 + 224·(B − Y', R − Y')/(255·k)
-//! with k = 1.772 and 1.402; chroma from the mean of each 2×2 block's RGB.
+//! Y = 0.299 R + 0.587 G + 0.114 B; Cb, Cr = 128 + (B − Y, R − Y)/k with k = 1.772 and 1.402
+//! (JFIF's full range, signalled in the stream's VUI): limited range (Y 16–235) has 16% coarser
+//! steps, and on `bunny-marble` its round trip alone scored worse in the fovea than JPEG q85
+//! (docs/encoding.md). Chroma from the mean of each 2×2 block's RGB.
 
 /// One I420 picture (Y, then U, then V, tightly packed), as openh264 reads it.
 pub struct I420 {
@@ -86,15 +88,15 @@ pub fn rgba_to_i420(
                     f32::from(rgba[i + 1]),
                     f32::from(rgba[i + 2]),
                 );
-                y[py * width + px] = q(16.0 + luma(r, g, b) * (219.0 / 255.0));
+                y[py * width + px] = q(luma(r, g, b));
                 sum[0] += r;
                 sum[1] += g;
                 sum[2] += b;
             }
             let [r, g, b] = sum.map(|s| s / 4.0);
             let l = luma(r, g, b);
-            u[by * hw + bx] = q(128.0 + (b - l) * (224.0 / 255.0 / 1.772));
-            v[by * hw + bx] = q(128.0 + (r - l) * (224.0 / 255.0 / 1.402));
+            u[by * hw + bx] = q(128.0 + (b - l) / 1.772);
+            v[by * hw + bx] = q(128.0 + (r - l) / 1.402);
         }
     }
 }
@@ -129,7 +131,7 @@ fn planes(pic: &impl openh264::formats::YUVSource) -> (Vec<u8>, Vec<u8>, Vec<u8>
     )
 }
 
-/// The inverse, for tests and measurements (what a BT.601 limited-range decoder shows), each
+/// The inverse, for tests and measurements (what a BT.601 full-range decoder shows), each
 /// chroma sample repeated over its 2×2 block.
 pub fn i420_to_rgba(y: &[u8], u: &[u8], v: &[u8], width: usize, height: usize) -> Vec<u8> {
     let hw = width / 2;
@@ -163,7 +165,7 @@ pub fn i420_to_rgba_filtered(y: &[u8], u: &[u8], v: &[u8], width: usize, height:
     })
 }
 
-/// BT.601 limited range to RGBA, rounded, with each pixel's (Cb, Cr) codes from `chroma`.
+/// BT.601 full range to RGBA, rounded, with each pixel's (Cb, Cr) codes from `chroma`.
 fn to_rgba(
     y: &[u8],
     width: usize,
@@ -173,10 +175,10 @@ fn to_rgba(
     let mut out = Vec::with_capacity(width * height * 4);
     for py in 0..height {
         for px in 0..width {
-            let l = (f32::from(y[py * width + px]) - 16.0) * (255.0 / 219.0);
+            let l = f32::from(y[py * width + px]);
             let (u, v) = chroma(px, py);
-            let cb = (u - 128.0) * (255.0 / 224.0 * 1.772);
-            let cr = (v - 128.0) * (255.0 / 224.0 * 1.402);
+            let cb = (u - 128.0) * 1.772;
+            let cr = (v - 128.0) * 1.402;
             let (r, b) = (l + cr, l + cb);
             let g = (l - 0.299 * r - 0.114 * b) / 0.587;
             out.extend([r, g, b].map(|x| (x + 0.5).clamp(0.0, 255.0) as u8));
@@ -198,15 +200,15 @@ mod tests {
 
     #[test]
     fn black_white_and_grey_land_on_the_standards_codes() {
-        for (grey, luma) in [(0u8, 16u8), (255, 235), (128, 126)] {
+        for (grey, luma) in [(0u8, 0u8), (255, 255), (128, 128)] {
             let (y, u, v) = convert(&[grey, grey, grey, 255].repeat(4), 2, 2);
             assert_eq!((y[0], u[0], v[0]), (luma, 128, 128), "grey {grey}");
         }
         // Saturated primaries reach the chroma extremes without wrapping.
         let (_, u, v) = convert(&[0, 0, 255, 255].repeat(4), 2, 2);
-        assert_eq!(u[0], 240);
+        assert_eq!(u[0], 255);
         let (_, _, v_red) = convert(&[255, 0, 0, 255].repeat(4), 2, 2);
-        assert_eq!((v[0] < 128, v_red[0]), (true, 240));
+        assert_eq!((v[0] < 128, v_red[0]), (true, 255));
     }
 
     #[test]

@@ -174,6 +174,9 @@ pub async fn screenshot(page: &Page, name: &str) {
 /// Distinct colours (5 bits per channel) on the canvas: a blank or flat frame has a handful.
 pub const COLOURS: &str = "(() => { const c = document.getElementById('view'); const d = c.getContext('2d').getImageData(0, 0, c.width, c.height).data; const s = new Set(); for (let i = 0; i < d.length; i += 4) s.add((d[i] >> 3) << 10 | (d[i + 1] >> 3) << 5 | (d[i + 2] >> 3)); return s.size; })()";
 
+/// Mean RGB of the canvas's top-left 40×40 corner (background, far from the gaze marker).
+pub const CORNER: &str = "(() => { const c = document.getElementById('view'); const d = c.getContext('2d').getImageData(0, 0, 40, 40).data; const m = [0, 0, 0]; for (let i = 0; i < d.length; i += 4) for (let k = 0; k < 3; k++) m[k] += d[i + k] / 1600; return m; })()";
+
 /// Centroid of the server-drawn marker's magenta pixels, in canvas pixels.
 pub const MARKER: &str = "(() => { const c = document.getElementById('view'); const d = c.getContext('2d').getImageData(0, 0, c.width, c.height).data; let sx = 0, sy = 0, n = 0; for (let i = 0; i < d.length; i += 4) if (d[i] > 190 && d[i + 1] < 130 && d[i + 2] > 140) { const k = i / 4; sx += k % c.width + 0.5; sy += Math.floor(k / c.width) + 0.5; n++; } return n ? {x: sx / n, y: sy / n, w: c.width, h: c.height} : null; })()";
 

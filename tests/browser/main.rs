@@ -15,7 +15,7 @@ use std::time::Duration;
 use serde_json::Value;
 
 use harness::{
-    artifacts, eval, gaze_at, press, screenshot, wait_for, Fixture, Server, COLOURS, MARKER,
+    artifacts, eval, gaze_at, press, screenshot, wait_for, Fixture, Server, COLOURS, CORNER, MARKER,
 };
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
@@ -154,6 +154,8 @@ async fn switching_scene_size_and_codec_keeps_showing_frames() {
 async fn h264_frames_decode_with_webcodecs_and_the_canvas_shows_the_scene() {
     let f = Fixture::start(&[]).await;
     let page = f.page().await;
+    wait_for(&page, "window.fovea.framesShown >= 1", 30).await;
+    let jpeg_corner: Vec<f64> = serde_json::from_value(eval(&page, CORNER).await).unwrap();
     eval(&page, "(() => { const s = document.getElementById('codec'); s.value = 'h264'; s.dispatchEvent(new Event('change')); return true; })()").await;
     wait_for(
         &page,
@@ -189,6 +191,15 @@ async fn h264_frames_decode_with_webcodecs_and_the_canvas_shows_the_scene() {
         keys >= 1 && decoded > keys,
         "P-frames between keyframes: {mix}"
     );
+    // The stream is full-range BT.601 and says so: colours come back as JPEG showed them (a
+    // decoder reading it as limited range would stretch the dark background darker).
+    let h264_corner: Vec<f64> = serde_json::from_value(eval(&page, CORNER).await).unwrap();
+    for k in 0..3 {
+        assert!(
+            (h264_corner[k] - jpeg_corner[k]).abs() < 6.0,
+            "corner colour: H.264 {h264_corner:?}, JPEG {jpeg_corner:?}"
+        );
+    }
     screenshot(&page, "h264").await;
     // A decoder error restarts the decoder, which needs a keyframe: it asks, and frames go on.
     let decoded = eval(&page, "window.fovea.player.decoded")

@@ -1,4 +1,4 @@
-//! RGB → I420 pass (H.264 sessions): the output image converted to BT.601 limited-range Y, U
+//! RGB → I420 pass (H.264 sessions): the output image converted to BT.601 full-range Y, U
 //! and V planes on the GPU, so the readback is 1.5 bytes a pixel instead of 4 and the encoder
 //! thread skips the conversion. CPU twin: `encode::yuv::rgba_to_i420` (tests/i420.rs holds the
 //! GPU to it).
