@@ -24,15 +24,31 @@ impl CodecConfig {
     /// The curve a configuration belongs to: the same codec and foveated encoding, varying only
     /// in quality or bitrate.
     pub fn family(&self) -> String {
-        let codec = match self.codec {
+        match self.foveated() {
+            Some(how) => format!("{} + {how}", self.codec_name()),
+            None => self.codec_name().to_string(),
+        }
+    }
+
+    /// The family of the same codec without foveated encoding.
+    pub fn plain_family(&self) -> String {
+        self.codec_name().to_string()
+    }
+
+    fn codec_name(&self) -> &'static str {
+        match self.codec {
             Codec::H264 => "H.264",
             Codec::Png => "PNG",
             Codec::Jpeg => "JPEG",
-        };
+        }
+    }
+
+    /// The foveated encoding, if any, as the family names it.
+    fn foveated(&self) -> Option<String> {
         match (self.low_pass, self.inset_deg) {
-            (_, Some(deg)) => format!("{codec} + inset {deg}°"),
-            (true, None) => format!("{codec} + low-pass"),
-            (false, None) => codec.to_string(),
+            (_, Some(deg)) => Some(format!("inset {deg}°")),
+            (true, None) => Some("low-pass".into()),
+            (false, None) => None,
         }
     }
 }
@@ -69,10 +85,9 @@ pub fn codec_configs() -> Vec<CodecConfig> {
             Some(k) => format!("{k} kbit/s"),
             None => format!("q{}", c.jpeg_q),
         };
-        let family = c.family();
-        c.name = match family.split_once(" + ") {
-            Some((codec, rest)) => format!("{codec} {knob} + {rest}"),
-            None => format!("{family} {knob}"),
+        c.name = match c.foveated() {
+            Some(how) => format!("{} {knob} + {how}", c.codec_name()),
+            None => format!("{} {knob}", c.codec_name()),
         };
     }
     out

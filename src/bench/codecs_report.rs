@@ -124,7 +124,11 @@ impl CodecReport {
             return;
         };
         let (goal, goal_kbps) = (target.flip_fovea, target.kbps);
-        let mut families: Vec<&str> = self.rows.iter().map(|r| r.family.as_str()).collect();
+        let mut families: Vec<(&str, String)> = self
+            .rows
+            .iter()
+            .map(|r| (r.family.as_str(), r.config.plain_family()))
+            .collect();
         families.dedup();
         let at = |family: &str| {
             let pts: Vec<(f64, f64)> = self
@@ -135,10 +139,9 @@ impl CodecReport {
                 .collect();
             at_quality(&pts, goal)
         };
-        for family in families {
+        for (family, plain) in families {
             let here = at(family);
-            let codec = family.split(" + ").next().unwrap_or(family);
-            let plain = (codec != family).then(|| at(codec));
+            let plain = (plain != family).then(|| at(&plain));
             self.equal_quality.push(EqualQuality {
                 family: family.to_string(),
                 at: here,

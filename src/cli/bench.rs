@@ -1,6 +1,8 @@
 //! `fovea bench`: the speed/accuracy sweep's command line, progress bar and Ctrl-C.
 
 use std::path::PathBuf;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::Arc;
 
 use anyhow::{Context, Result};
 
@@ -124,12 +126,9 @@ pub fn bench(a: BenchArgs) -> Result<()> {
         pupil_mm: a.pupil_mm,
         against,
     };
-    let stop = stop_on_ctrl_c()?;
-    let mut renderer = Renderer::new().context("opening the GPU")?;
-    eprintln!("adapter: {}", renderer.adapter());
-    let mut progress = progress_bar();
-    let report = fovea::bench::run(&mut renderer, &opts, &stop, &mut progress)?;
-    eprintln!();
+    let report = with_renderer(|renderer, stop, progress| {
+        Ok(fovea::bench::run(renderer, &opts, stop, progress)?)
+    })?;
     fovea::bench::write_reports(&report, &a.out)
         .with_context(|| format!("writing reports to {}", a.out.display()))?;
     println!("{}", report.markdown());
@@ -146,7 +145,7 @@ pub fn bench(a: BenchArgs) -> Result<()> {
 }
 
 /// A one-line progress bar with an ETA, redrawn at most five times a second.
-pub(super) fn progress_bar() -> impl FnMut(usize, usize, &str) {
+fn progress_bar() -> impl FnMut(usize, usize, &str) {
     let started = std::time::Instant::now();
     let mut last_draw = started - std::time::Duration::from_secs(1);
     move |done: usize, total: usize, what: &str| {
@@ -171,14 +170,22 @@ pub(super) fn progress_bar() -> impl FnMut(usize, usize, &str) {
     }
 }
 
-/// Ctrl-C sets the returned flag: the run stops after the frame in hand and keeps its results.
-pub(super) fn stop_on_ctrl_c() -> Result<std::sync::Arc<std::sync::atomic::AtomicBool>> {
-    let stop = std::sync::Arc::new(std::sync::atomic::AtomicBool::new(false));
+/// Opens the GPU and runs `sweep` with a progress bar; Ctrl-C sets the flag it gets, so it
+/// stops after the frame in hand and keeps its results.
+pub(super) fn with_renderer<R>(
+    sweep: impl FnOnce(&mut Renderer, &AtomicBool, fovea::bench::Progress) -> Result<R>,
+) -> Result<R> {
+    let stop = Arc::new(AtomicBool::new(false));
     let flag = stop.clone();
     ctrlc::set_handler(move || {
         eprintln!("\nstopping after this frame; writing the results so far");
-        flag.store(true, std::sync::atomic::Ordering::Relaxed);
+        flag.store(true, Ordering::Relaxed);
     })
     .context("installing the Ctrl-C handler")?;
-    Ok(stop)
+    let mut renderer = Renderer::new().context("opening the GPU")?;
+    eprintln!("adapter: {}", renderer.adapter());
+    let mut progress = progress_bar();
+    let out = sweep(&mut renderer, &stop, &mut progress);
+    eprintln!();
+    out
 }

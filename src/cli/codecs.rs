@@ -2,9 +2,8 @@
 
 use anyhow::{bail, Context, Result};
 
-use super::bench::{progress_bar, stop_on_ctrl_c, BenchArgs};
+use super::bench::{with_renderer, BenchArgs};
 use super::parse::parse_size;
-use fovea::render::Renderer;
 
 pub fn bench_codecs(a: BenchArgs) -> Result<()> {
     let Some(file) = &a.gaze_file else {
@@ -50,12 +49,9 @@ pub fn bench_codecs(a: BenchArgs) -> Result<()> {
         },
         pictures: a.pictures.then(|| a.out.join("codecs")),
     };
-    let stop = stop_on_ctrl_c()?;
-    let mut renderer = Renderer::new().context("opening the GPU")?;
-    eprintln!("adapter: {}", renderer.adapter());
-    let mut progress = progress_bar();
-    let report = fovea::bench::run_codecs(&mut renderer, &opts, &stop, &mut progress)?;
-    eprintln!();
+    let report = with_renderer(|renderer, stop, progress| {
+        Ok(fovea::bench::run_codecs(renderer, &opts, stop, progress)?)
+    })?;
     fovea::bench::write_codec_reports(&report, &a.out)
         .with_context(|| format!("writing reports to {}", a.out.display()))?;
     println!("{}", report.markdown());

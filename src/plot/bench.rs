@@ -10,6 +10,51 @@ use plotters::prelude::*;
 use super::{colour, err, legend, padded, Plot};
 use crate::bench::{pareto_front, BenchReport};
 
+/// A chart with a log x axis over `x` (ticks at 1, 2, 5 × 10ⁿ) and FLIP from 0 up to `flip_max`
+/// on y: the bench's cost-vs-error chart and the codecs' bitrate-vs-quality chart.
+pub(super) type LogFlipChart<'a, DB> = ChartContext<
+    'a,
+    DB,
+    Cartesian2d<
+        plotters::coord::combinators::WithKeyPoints<plotters::coord::combinators::LogCoord<f64>>,
+        plotters::coord::types::RangedCoordf64,
+    >,
+>;
+
+pub(super) fn log_flip_chart<'a, DB: DrawingBackend>(
+    root: &'a DrawingArea<DB, Shift>,
+    title: &str,
+    x: (f64, f64),
+    flip_max: f64,
+    x_desc: &str,
+    y_desc: &str,
+) -> Result<LogFlipChart<'a, DB>, String> {
+    let mut chart = ChartBuilder::on(root)
+        .caption(title, ("sans-serif", 18).into_font().style(FontStyle::Bold))
+        .margin(16)
+        .x_label_area_size(48)
+        .y_label_area_size(70)
+        .build_cartesian_2d(
+            padded(x.0, x.1, true)
+                .log_scale()
+                .with_key_points(one_two_five(x.0, x.1)),
+            padded(0.0, flip_max, false),
+        )
+        .map_err(err)?;
+    chart
+        .configure_mesh()
+        .light_line_style(WHITE.mix(0.0))
+        .x_desc(x_desc)
+        .y_desc(y_desc)
+        .axis_desc_style(("sans-serif", 15))
+        .label_style(("sans-serif", 13))
+        .x_label_formatter(&|v| format!("{v:.0}"))
+        .y_label_formatter(&|v| format!("{v:.3}"))
+        .draw()
+        .map_err(err)?;
+    Ok(chart)
+}
+
 /// One configuration's medians.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Point {
@@ -29,7 +74,7 @@ pub struct BenchPlot {
 }
 
 /// Tick values 1, 2, 5 × 10ⁿ around [lo, hi]: readable labels on a log axis.
-pub(super) fn one_two_five(lo: f64, hi: f64) -> Vec<f64> {
+fn one_two_five(lo: f64, hi: f64) -> Vec<f64> {
     let mut out = Vec::new();
     let mut decade = 10f64.powf((lo / 1.3).max(1e-6).log10().floor());
     while decade <= hi * 1.3 {
@@ -117,29 +162,14 @@ impl Plot for BenchPlot {
             (a.min(p.frame_ms).min(lo), b.max(p.frame_ms))
         });
         let fhi = self.points.iter().map(|p| p.flip).fold(0.0, f64::max);
-        let mut chart = ChartBuilder::on(root)
-            .caption(title, ("sans-serif", 18).into_font().style(FontStyle::Bold))
-            .margin(16)
-            .x_label_area_size(48)
-            .y_label_area_size(70)
-            .build_cartesian_2d(
-                padded(tlo, thi, true)
-                    .log_scale()
-                    .with_key_points(one_two_five(tlo, thi)),
-                padded(0.0, fhi, false),
-            )
-            .map_err(err)?;
-        chart
-            .configure_mesh()
-            .light_line_style(WHITE.mix(0.0))
-            .x_desc("median frame time, ms (log scale)")
-            .y_desc("mean FLIP against the reference")
-            .axis_desc_style(("sans-serif", 15))
-            .label_style(("sans-serif", 13))
-            .x_label_formatter(&|v| format!("{v:.0}"))
-            .y_label_formatter(&|v| format!("{v:.3}"))
-            .draw()
-            .map_err(err)?;
+        let mut chart = log_flip_chart(
+            root,
+            &title,
+            (tlo, thi),
+            fhi,
+            "median frame time, ms (log scale)",
+            "mean FLIP against the reference",
+        )?;
         let mut front: Vec<&Point> = self.points.iter().filter(|p| p.pareto).collect();
         front.sort_by(|a, b| a.frame_ms.total_cmp(&b.frame_ms));
         chart

@@ -5,8 +5,8 @@
 use plotters::coord::Shift;
 use plotters::prelude::*;
 
-use super::bench::one_two_five;
-use super::{colour, err, legend, padded, Plot};
+use super::bench::log_flip_chart;
+use super::{colour, err, legend, Plot};
 use crate::bench::{CodecReport, TARGET};
 
 pub struct CodecPlot {
@@ -68,32 +68,14 @@ impl Plot for CodecPlot {
             .iter()
             .fold((f64::MAX, f64::MIN), |(a, b), p| (a.min(p.0), b.max(p.0)));
         let fhi = all.iter().map(|p| p.1).fold(0.0, f64::max);
-        let mut chart = ChartBuilder::on(root)
-            .caption(
-                &self.title,
-                ("sans-serif", 18).into_font().style(FontStyle::Bold),
-            )
-            .margin(16)
-            .x_label_area_size(48)
-            .y_label_area_size(70)
-            .build_cartesian_2d(
-                padded(blo, bhi, true)
-                    .log_scale()
-                    .with_key_points(one_two_five(blo, bhi)),
-                padded(0.0, fhi, false),
-            )
-            .map_err(err)?;
-        chart
-            .configure_mesh()
-            .light_line_style(WHITE.mix(0.0))
-            .x_desc("kbit/s at 60 fps, keyframes included (log scale)")
-            .y_desc("mean FLIP within 5° of the gaze")
-            .axis_desc_style(("sans-serif", 15))
-            .label_style(("sans-serif", 13))
-            .x_label_formatter(&|v| format!("{v:.0}"))
-            .y_label_formatter(&|v| format!("{v:.3}"))
-            .draw()
-            .map_err(err)?;
+        let mut chart = log_flip_chart(
+            root,
+            &self.title,
+            (blo, bhi),
+            fhi,
+            "kbit/s at 60 fps, keyframes included (log scale)",
+            "mean FLIP within 5° of the gaze",
+        )?;
         let (x0, x1) = (blo / 1.3, bhi * 1.3);
         for (level, name, c) in [
             (self.target, format!("{TARGET}'s foveal FLIP"), BLACK),
