@@ -22,14 +22,24 @@
 //!   current speed v: in h ms the eye moves v·h − v²h²/(4R) until it stops at R (h ≥ 2R/v).
 //!
 //! History is dropped at a gap (samples more than `MAX_SAMPLE_GAP_MS` apart, or more than
-//! four typical intervals): after track loss the eye is somewhere new. Predictions are
+//! four typical intervals): after track loss the eye is somewhere new. A saccade confirmed
+//! within `POST_GAP_MS` of the gap whose speed reaches `post_gap_onset_deg_s` is a post-gap
+//! movement instead: after a blink the eye is often found already moving, its onset unseen,
+//! and such movements run slower and longer than the main sequence says (on the shipped
+//! recordings, 150–400°/s for 30–40 ms). It is extrapolated kinematically: a
+//! position-velocity-acceleration fit over `post_gap_fit_ms`, moved on at the fitted
+//! deceleration until it stops (never accelerated), by `post_gap_gain` of that travel (the
+//! fit is noisy, and a shrunk guess loses less when the eye stops early). It is not learned
+//! from, and it ends at the slow speed only. Predictions are
 //! clamped to the frame widened by `OFF_FRAME_MARGIN` and are never NaN. The tuning was
-//! chosen on the 500 Hz shipped recording and is reported on the 1000 Hz one
-//! (`docs/gaze/prediction.md`).
+//! chosen on the 500 Hz shipped recording (`examples/tune_prediction.rs`: the saccade knobs
+//! on the saccade class, then the post-gap knobs on the post-gap class) and is reported on
+//! the 1000 Hz one (`docs/gaze/prediction.md`).
 
 use std::collections::VecDeque;
 
 use super::{MAX_SAMPLE_GAP_MS, OFF_FRAME_MARGIN};
+use crate::gaze::classes::POST_GAP_MS;
 
 /// The knobs, chosen on one recording (see the module comment).
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -42,6 +52,13 @@ pub struct Tuning {
     pub rising_gain: f64,
     /// Scales the main-sequence amplitude (real saccades run slower than the synthetic eye's).
     pub amplitude_gain: f64,
+    /// The window (ms) of the position-velocity-acceleration fit that follows a movement
+    /// found within `POST_GAP_MS` of a gap.
+    pub post_gap_fit_ms: f64,
+    /// The share of the kinematic travel predicted after a gap.
+    pub post_gap_gain: f64,
+    /// The peak speed (deg/s) that makes a movement near a gap a post-gap movement.
+    pub post_gap_onset_deg_s: f64,
 }
 
 impl Default for Tuning {
@@ -51,9 +68,12 @@ impl Default for Tuning {
             onset_deg_s: 45.0,
             confirm: 2,
             end_fraction: 0.5,
-            past_peak: 0.4,
+            past_peak: 0.95,
             rising_gain: 1.0,
-            amplitude_gain: 0.7,
+            amplitude_gain: 0.6,
+            post_gap_fit_ms: 6.0,
+            post_gap_gain: 0.4,
+            post_gap_onset_deg_s: 100.0,
         }
     }
 }
@@ -63,6 +83,17 @@ impl Default for Tuning {
 struct Saccade {
     onset: [f64; 2],
     peak_deg_s: f64,
+    /// Confirmed within `POST_GAP_MS` of a gap (its onset may have been missed).
+    near_gap: bool,
+}
+
+impl Saccade {
+    /// A fast movement right after a gap: its onset was not seen and it need not follow the
+    /// main sequence (blink-associated movements run slower and longer than saccades), so it
+    /// is extrapolated kinematically and not learned from.
+    fn after_gap(&self, tuning: &Tuning) -> bool {
+        self.near_gap && self.peak_deg_s >= tuning.post_gap_onset_deg_s
+    }
 }
 
 #[derive(Debug, Clone)]
@@ -71,6 +102,10 @@ pub struct Predictor {
     /// Degrees of visual angle per frame width and height (small-angle scale of the display).
     deg_per_frame: [f64; 2],
     history: VecDeque<(f64, [f64; 2])>,
+    /// The last `Tuning::post_gap_fit_ms` of samples, for the kinematic fit after a gap.
+    recent: VecDeque<(f64, [f64; 2])>,
+    /// When the first sample after the last gap (or the first sample at all) arrived.
+    resumed_ms: Option<f64>,
     /// Typical time between samples, ms (a running median's cheap cousin: a slow average).
     interval_ms: Option<f64>,
     /// Samples in a row at onset speed, before a saccade is confirmed.
@@ -127,6 +162,68 @@ pub fn slope<'a>(samples: impl Iterator<Item = &'a (f64, [f64; 2])> + Clone) -> 
     }))
 }
 
+/// Drops samples older than `window_ms` before `t_ms`, keeping at least two.
+fn keep_last(samples: &mut VecDeque<(f64, [f64; 2])>, t_ms: f64, window_ms: f64) {
+    while samples.len() > 2 && samples.front().is_some_and(|(t, _)| t_ms - t > window_ms) {
+        samples.pop_front();
+    }
+}
+
+/// Least-squares p(τ) = c + v·τ + a·τ²/2 per axis, τ in ms before the newest sample, in
+/// degrees (`scale` per frame unit): the velocity (deg/ms) and acceleration (deg/ms²) at the
+/// newest sample. None with fewer than three samples or a singular fit.
+pub fn quadratic_fit(
+    samples: &VecDeque<(f64, [f64; 2])>,
+    scale: [f64; 2],
+) -> Option<([f64; 2], [f64; 2])> {
+    let &(t_last, _) = samples.back()?;
+    if samples.len() < 3 {
+        return None;
+    }
+    // Normal equations over the basis (1, τ, τ²/2).
+    let mut m = [[0.0f64; 3]; 3];
+    let mut r = [[0.0f64; 3]; 2];
+    for &(t, p) in samples {
+        let tau = t - t_last;
+        let b = [1.0, tau, 0.5 * tau * tau];
+        for i in 0..3 {
+            for j in 0..3 {
+                m[i][j] += b[i] * b[j];
+            }
+            for axis in 0..2 {
+                r[axis][i] += b[i] * p[axis] * scale[axis];
+            }
+        }
+    }
+    let solve = |rhs: [f64; 3]| -> Option<[f64; 3]> {
+        let det = det3(m);
+        if det.abs() < 1e-12 {
+            return None;
+        }
+        Some(std::array::from_fn(|k| {
+            let mut mk = m;
+            for (row, value) in mk.iter_mut().zip(rhs) {
+                row[k] = value;
+            }
+            det3(mk) / det
+        }))
+    };
+    let x = solve(r[0])?;
+    let y = solve(r[1])?;
+    let out = ([x[1], y[1]], [x[2], y[2]]);
+    [out.0, out.1]
+        .iter()
+        .flatten()
+        .all(|v| v.is_finite())
+        .then_some(out)
+}
+
+fn det3(m: [[f64; 3]; 3]) -> f64 {
+    m[0][0] * (m[1][1] * m[2][2] - m[1][2] * m[2][1])
+        - m[0][1] * (m[1][0] * m[2][2] - m[1][2] * m[2][0])
+        + m[0][2] * (m[1][0] * m[2][1] - m[1][1] * m[2][0])
+}
+
 /// Saccade amplitude (deg) whose main-sequence peak velocity is `v` (deg/s).
 pub fn amplitude_from_peak_velocity(v: f64) -> f64 {
     let v = v.clamp(0.0, 800.0);
@@ -158,6 +255,8 @@ impl Predictor {
             tuning,
             deg_per_frame: frame_deg,
             history: VecDeque::new(),
+            recent: VecDeque::new(),
+            resumed_ms: None,
             interval_ms: None,
             fast_run: 0,
             candidate_onset: None,
@@ -196,18 +295,20 @@ impl Predictor {
                 self.interval_ms = Some(0.95 * typical + 0.05 * dt);
             }
         }
-        self.history.push_back((t_ms, xy));
-        let window = self.tuning.velocity_ms;
-        while self.history.len() > 2 && self.history.front().is_some_and(|(t, _)| t_ms - t > window)
-        {
-            self.history.pop_front();
+        if self.history.is_empty() {
+            self.resumed_ms = Some(t_ms);
         }
+        self.history.push_back((t_ms, xy));
+        self.recent.push_back((t_ms, xy));
+        keep_last(&mut self.history, t_ms, self.tuning.velocity_ms);
+        keep_last(&mut self.recent, t_ms, self.tuning.post_gap_fit_ms);
         self.follow_saccade();
     }
 
     /// Drops everything learned: after a gap the eye is somewhere new.
     fn forget(&mut self) {
         self.history.clear();
+        self.recent.clear();
         self.fast_run = 0;
         self.candidate_onset = None;
         self.saccade = None;
@@ -239,8 +340,11 @@ impl Predictor {
         let tuning = self.tuning;
         self.follow_landing(speed);
         if let Some(s) = &mut self.saccade {
-            if speed < tuning.end_fraction * s.peak_deg_s || speed < 0.5 * tuning.onset_deg_s {
-                self.landing = self.saccade.take();
+            // A movement after a gap slows gradually (no main sequence): it ends at the
+            // slow speed only.
+            let slowed = !s.after_gap(&tuning) && speed < tuning.end_fraction * s.peak_deg_s;
+            if slowed || speed < 0.5 * tuning.onset_deg_s {
+                self.landing = self.saccade.take().filter(|s| !s.after_gap(&tuning));
                 self.fast_run = 0;
                 self.candidate_onset = None;
             } else {
@@ -257,11 +361,14 @@ impl Predictor {
             self.candidate_onset = self.history.front().map(|(_, p)| *p);
         }
         self.fast_run += 1;
+        let t_now = self.history.back().map_or(0.0, |(t, _)| *t);
+        let after_gap = self.resumed_ms.is_some_and(|t0| t_now - t0 <= POST_GAP_MS);
         if self.fast_run >= tuning.confirm {
             if let Some(onset) = self.candidate_onset {
                 self.saccade = Some(Saccade {
                     onset,
                     peak_deg_s: speed,
+                    near_gap: after_gap,
                 });
             }
         }
@@ -279,6 +386,36 @@ impl Predictor {
             .unwrap_or(0.0)
     }
 
+    /// The newest sample moved on along the fitted velocity, slowing at the fitted
+    /// deceleration until it stops; an accelerating fit is followed at constant velocity
+    /// (acceleration is not extrapolated, so the guess never runs ahead of it).
+    fn kinematic(&self, last: [f64; 2], h: f64) -> [f64; 2] {
+        let d = self.deg_per_frame;
+        let linear = || {
+            let v = slope(self.recent.iter())?;
+            Some(([v[0] * d[0], v[1] * d[1]], [0.0; 2]))
+        };
+        let Some((v, a)) = quadratic_fit(&self.recent, d).or_else(linear) else {
+            return last;
+        };
+        let speed = v[0].hypot(v[1]);
+        if speed <= 0.0 {
+            return last;
+        }
+        let dir = [v[0] / speed, v[1] / speed];
+        let decel = -(a[0] * dir[0] + a[1] * dir[1]);
+        let ahead = self.tuning.post_gap_gain
+            * if decel > 0.0 {
+                decelerated_travel(speed, speed * speed / (2.0 * decel), h)
+            } else {
+                speed * h
+            };
+        [
+            last[0] + dir[0] * ahead / d[0],
+            last[1] + dir[1] * ahead / d[1],
+        ]
+    }
+
     /// Whether a saccade is in flight (confirmed).
     pub fn in_saccade(&self) -> bool {
         self.saccade.is_some()
@@ -293,7 +430,9 @@ impl Predictor {
             0.0
         };
         let mut p = last;
-        if let Some(s) = self.saccade {
+        if self.saccade.is_some_and(|s| s.after_gap(&self.tuning)) {
+            p = self.kinematic(last, h);
+        } else if let Some(s) = self.saccade {
             let d = self.deg_per_frame;
             let moved = [(last[0] - s.onset[0]) * d[0], (last[1] - s.onset[1]) * d[1]];
             let travelled = moved[0].hypot(moved[1]);
