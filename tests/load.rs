@@ -6,7 +6,7 @@ use std::time::Duration;
 
 use fovea::client::load::{run, LoadOptions};
 use fovea::client::{Client, Event};
-use fovea::protocol::{Ack, Gaze, Hello};
+use fovea::protocol::{Ack, Codec, Gaze, Hello};
 use fovea::server::ServerOptions;
 use tokio::io::{AsyncReadExt, AsyncWriteExt};
 
@@ -143,6 +143,8 @@ async fn admission_stalls_and_the_load_report() {
         hello: small(),
         seed: 3,
         recording: None,
+        // One session per codec: the per-codec split is exercised on a real server.
+        codecs: vec![Codec::Jpeg, Codec::H264],
     };
     let report = run(&opts, |_, _| {}).await;
     // The sessions end as the tool leaves; the count is read once they have.
@@ -172,6 +174,22 @@ async fn admission_stalls_and_the_load_report() {
         assert!(report.stages_ms.contains_key(stage), "{stage}");
     }
     assert_eq!(report.fps_per_session.len(), 2);
+    let names: Vec<&str> = report.by_codec.keys().map(|k| k.as_str()).collect();
+    assert_eq!(names, ["h264", "jpeg"]);
+    for (codec, c) in &report.by_codec {
+        assert!(
+            c.sessions == 1
+                && c.frames > 0
+                && c.latency_ms.count > 0
+                && c.encode_ms.p50 > 0.0
+                && c.kbit_s_per_session > 0.0,
+            "{codec}: {c:?}"
+        );
+    }
+    assert_eq!(
+        report.by_codec.values().map(|c| c.frames).sum::<u64>(),
+        report.frames
+    );
     let json = serde_json::to_value(&report).unwrap();
     for field in [
         "fps_total",
@@ -181,6 +199,7 @@ async fn admission_stalls_and_the_load_report() {
         "errors",
         "refused",
         "fps_timeline",
+        "by_codec",
     ] {
         assert!(json.get(field).is_some(), "{field}");
     }
@@ -215,6 +234,7 @@ async fn load_can_be_driven_by_a_gaze_recording() {
         hello: small(),
         seed: 1,
         recording: Some(std::sync::Arc::new(rec.samples)),
+        codecs: vec![],
     };
     let report = run(&opts, |_, _| {}).await;
     // 500 Hz for ~2 s per session, minus blinks and track loss.
@@ -249,6 +269,7 @@ async fn three_sessions_share_the_renderer_fairly() {
         hello: small(),
         seed: 9,
         recording: None,
+        codecs: vec![],
     };
     let report = run(&opts, |_, _| {}).await;
     assert_eq!(report.fps_per_session.len(), 3);

@@ -38,6 +38,10 @@ pub struct LoadArgs {
     pub size: (u32, u32),
     #[command(flatten)]
     pub encoding: super::parse::EncodingArgs,
+    /// Compare codecs in one run: session i asks for the i-th codec of this list (cycling),
+    /// e.g. jpeg,h264; the report gains a line per codec. Overrides --codec.
+    #[arg(long, value_delimiter = ',', value_parser = super::parse::codec)]
+    pub mix_codecs: Vec<fovea::protocol::Codec>,
     /// Sweep budget: p95 gaze-to-frame latency, ms.
     #[arg(long, default_value_t = 500.0)]
     pub budget_ms: f64,
@@ -87,6 +91,9 @@ pub fn load(a: LoadArgs) -> Result<()> {
     if counts.iter().any(|n| *n == 0 || *n > 256) {
         bail!("session counts run from 1 to 256");
     }
+    if a.encoding.inset_deg.is_some() && a.mix_codecs.contains(&fovea::protocol::Codec::H264) {
+        bail!("--inset-deg sends JPEG or PNG insets; leave h264 out of --mix-codecs");
+    }
     let duration = std::time::Duration::from_secs_f64(a.duration.clamp(1.0, 600.0));
     let runtime = tokio::runtime::Runtime::new()?;
     let mut reports = Vec::new();
@@ -108,6 +115,7 @@ pub fn load(a: LoadArgs) -> Result<()> {
             },
             seed: a.seed,
             recording: recording.clone(),
+            codecs: a.mix_codecs.clone(),
         };
         let total = duration.as_secs_f64();
         let report = runtime.block_on(fovea::client::load::run(&opts, move |sessions, t| {
@@ -132,6 +140,14 @@ pub fn load(a: LoadArgs) -> Result<()> {
             report.refused,
             report.connection_failures
         );
+        if report.by_codec.len() > 1 {
+            for (codec, c) in &report.by_codec {
+                println!(
+                    "  {codec}: {} sessions, {} frames, gaze→frame p50 {:.1} p95 {:.1} ms; render p50 {:.1} ms; encode p50 {:.2} ms; {:.0} kbit/s per session",
+                    c.sessions, c.frames, c.latency_ms.p50, c.latency_ms.p95, c.render_ms.p50, c.encode_ms.p50, c.kbit_s_per_session
+                );
+            }
+        }
         if report.reconnects > 0 || report.sessions_ended_early > 0 {
             let gap = report.reconnect_gap_ms.map_or(String::new(), |g| {
                 format!(", gap between frames p50 {:.0} max {:.0} ms", g.p50, g.max)

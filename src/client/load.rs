@@ -14,7 +14,7 @@ use super::link::LinkEvent;
 use super::ClientError;
 
 use crate::gaze::synthetic::{degrees_to_frame, SyntheticEye};
-use crate::protocol::{Hello, Trigger};
+use crate::protocol::{Codec, Hello, Trigger};
 use crate::viewing::Viewing;
 
 #[derive(Debug, Clone)]
@@ -33,6 +33,22 @@ pub struct LoadOptions {
     /// Drive sessions with this recording (looped, each session from a different offset)
     /// instead of the synthetic eye.
     pub recording: Option<std::sync::Arc<Vec<crate::gaze::Sample>>>,
+    /// Session i asks for codec i mod n (empty: `hello.codec` for all), so codecs are
+    /// compared in one run, on one server, under the same render noise.
+    pub codecs: Vec<Codec>,
+}
+
+/// One codec's share of a run (`LoadReport::by_codec`).
+#[derive(Debug, Clone, Serialize)]
+pub struct CodecStats {
+    pub sessions: usize,
+    pub frames: u64,
+    /// Gaze-to-frame-received, client clock.
+    pub latency_ms: Percentiles,
+    pub render_ms: Percentiles,
+    pub encode_ms: Percentiles,
+    /// Mean over this codec's sessions.
+    pub kbit_s_per_session: f64,
 }
 
 #[derive(Debug, Clone, Copy, Serialize, PartialEq)]
@@ -98,12 +114,15 @@ pub struct LoadReport {
     pub ended_early_reason: Option<String>,
     /// Frames received per second of the run, all sessions together.
     pub fps_timeline: Vec<u64>,
+    /// Per codec: latency, render and encode, bitrate (one entry unless codecs were mixed).
+    pub by_codec: BTreeMap<String, CodecStats>,
     #[serde(skip)]
     pub histograms: BTreeMap<String, Histogram<u64>>,
 }
 
 #[derive(Default)]
 struct SessionResult {
+    codec: String,
     frames: u64,
     /// Image bytes received (the frame headers' `bytes`).
     bytes: u64,
@@ -145,7 +164,10 @@ pub async fn run(
     let progress = Arc::new(progress);
     let mut tasks = Vec::new();
     for i in 0..opts.sessions {
-        let opts = opts.clone();
+        let mut opts = opts.clone();
+        if let Some(c) = opts.codecs.get(i % opts.codecs.len().max(1)) {
+            opts.hello.codec = *c;
+        }
         let (hists, timeline, progress) = (hists.clone(), timeline.clone(), progress.clone());
         tasks.push(tokio::spawn(async move {
             tokio::time::sleep(opts.ramp_up * i as u32).await;
@@ -167,6 +189,7 @@ pub async fn run(
         .iter()
         .fold((f64::INFINITY, 0.0f64), |(a, b), v| (a.min(*v), b.max(*v)));
     let frames: u64 = results.iter().map(|r| r.frames).sum();
+    let by_codec = by_codec(&results, &hists);
     let kbit_s: Vec<f64> = results
         .iter()
         .filter(|r| !r.connect_failed && !r.refused)
@@ -193,7 +216,7 @@ pub async fn run(
         latency_ms: percentiles(&hists["latency"]),
         stages_ms: hists
             .iter()
-            .filter(|(k, _)| k.as_str() != "latency")
+            .filter(|(k, _)| k.as_str() != "latency" && !k.contains('/'))
             .map(|(k, h)| (k.clone(), percentiles(h)))
             .collect(),
         gaze_sent: results.iter().map(|r| r.gaze_sent).sum(),
@@ -216,8 +239,58 @@ pub async fn run(
         sessions_ended_early: results.iter().filter(|r| r.ended.is_some()).count() as u64,
         ended_early_reason: results.iter().find_map(|r| r.ended.clone()),
         fps_timeline: timeline.lock().map(|t| t.clone()).unwrap_or_default(),
+        by_codec,
         histograms: hists,
     }
+}
+
+/// Each codec's sessions and its `codec/stage` histograms.
+fn by_codec(
+    results: &[SessionResult],
+    hists: &BTreeMap<String, Histogram<u64>>,
+) -> BTreeMap<String, CodecStats> {
+    let mut out = BTreeMap::new();
+    let ran = |r: &&SessionResult| !r.connect_failed && !r.refused;
+    for r in results.iter().filter(ran) {
+        if out.contains_key(&r.codec) {
+            continue;
+        }
+        let mine: Vec<&SessionResult> = results
+            .iter()
+            .filter(ran)
+            .filter(|o| o.codec == r.codec)
+            .collect();
+        let stage = |name: &str| {
+            hists
+                .get(&format!("{}/{name}", r.codec))
+                .map_or_else(|| percentiles(&histogram()), percentiles)
+        };
+        let kbit_s: f64 = mine
+            .iter()
+            .map(|o| o.bytes as f64 * 8.0 / 1000.0 / o.active_s.max(1e-9))
+            .sum();
+        out.insert(
+            r.codec.clone(),
+            CodecStats {
+                sessions: mine.len(),
+                frames: mine.iter().map(|o| o.frames).sum(),
+                latency_ms: stage("latency"),
+                render_ms: stage("render"),
+                encode_ms: stage("encode"),
+                kbit_s_per_session: kbit_s / mine.len() as f64,
+            },
+        );
+    }
+    out
+}
+
+fn codec_name(c: Codec) -> String {
+    match c {
+        Codec::Jpeg => "jpeg",
+        Codec::Png => "png",
+        Codec::H264 => "h264",
+    }
+    .to_string()
 }
 
 #[allow(clippy::too_many_arguments)]
@@ -230,7 +303,10 @@ async fn session(
     timeline: Arc<Mutex<Vec<u64>>>,
     progress: Arc<impl Fn(usize, f64) + Send + Sync>,
 ) -> SessionResult {
-    let mut result = SessionResult::default();
+    let mut result = SessionResult {
+        codec: codec_name(opts.hello.codec),
+        ..SessionResult::default()
+    };
     let link = super::link::Link::open(super::link::LinkOptions {
         url: opts.url.clone(),
         token: opts.token.clone(),
@@ -287,9 +363,16 @@ async fn session(
                     .and_then(|s| sent_at.lock().ok().and_then(|m| m.get(&s).copied()))
                     .map(|t| now - t);
                 if let Ok(mut hs) = hists.lock() {
+                    let codec = codec_name(h.codec);
                     let mut rec = |k: &str, ms: f64| {
+                        let us = (ms * 1000.0).max(1.0) as u64;
                         if let Some(hh) = hs.get_mut(k) {
-                            let _ = hh.record((ms * 1000.0).max(1.0) as u64);
+                            let _ = hh.record(us);
+                        }
+                        if matches!(k, "latency" | "render" | "encode") {
+                            let per_codec =
+                                hs.entry(format!("{codec}/{k}")).or_insert_with(histogram);
+                            let _ = per_codec.record(us);
                         }
                     };
                     if let Some(l) = latency {
