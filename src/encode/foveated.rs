@@ -100,28 +100,38 @@ struct Level {
     h: u32,
 }
 
-/// A 2×2 box pyramid above the frame: levels 1..=MAX_LEVEL, each half the one below (rounded
-/// up; edge pixels repeat).
+impl Level {
+    fn at(&self, x: u32, y: u32) -> [f32; 3] {
+        self.rgb[(y * self.w + x) as usize]
+    }
+}
+
+/// A 2×2 box pyramid above the frame: levels 1..=MAX_LEVEL (index k − 1), each half the one
+/// below (rounded up; edge pixels repeat). Level 1 is averaged straight from the bytes: the
+/// frame itself is never copied to floats.
 fn pyramid(rgba: &[u8], width: u32, height: u32) -> Vec<Level> {
-    let base = Level {
-        rgb: rgba
-            .chunks_exact(4)
-            .map(|p| [f32::from(p[0]), f32::from(p[1]), f32::from(p[2])])
-            .collect(),
-        w: width,
-        h: height,
+    let byte = |x: u32, y: u32| -> [f32; 3] {
+        let i = ((y * width + x) * 4) as usize;
+        [
+            f32::from(rgba[i]),
+            f32::from(rgba[i + 1]),
+            f32::from(rgba[i + 2]),
+        ]
     };
-    let mut levels = vec![base];
+    let mut levels: Vec<Level> = Vec::with_capacity(MAX_LEVEL);
     for _ in 0..MAX_LEVEL {
-        let Some(prev) = levels.last() else { break };
-        let (w, h) = (prev.w.div_ceil(2), prev.h.div_ceil(2));
+        let (pw, ph) = levels.last().map_or((width, height), |l| (l.w, l.h));
+        let below = |x: u32, y: u32| match levels.last() {
+            Some(l) => l.at(x, y),
+            None => byte(x, y),
+        };
+        let (w, h) = (pw.div_ceil(2), ph.div_ceil(2));
         let mut rgb = Vec::with_capacity((w * h) as usize);
         for y in 0..h {
-            let (y0, y1) = (2 * y, (2 * y + 1).min(prev.h - 1));
+            let (y0, y1) = (2 * y, (2 * y + 1).min(ph - 1));
             for x in 0..w {
-                let (x0, x1) = (2 * x, (2 * x + 1).min(prev.w - 1));
-                let at = |xx: u32, yy: u32| prev.rgb[(yy * prev.w + xx) as usize];
-                let (a, b, c, d) = (at(x0, y0), at(x1, y0), at(x0, y1), at(x1, y1));
+                let (x0, x1) = (2 * x, (2 * x + 1).min(pw - 1));
+                let (a, b, c, d) = (below(x0, y0), below(x1, y0), below(x0, y1), below(x1, y1));
                 rgb.push(std::array::from_fn(|k| 0.25 * (a[k] + b[k] + c[k] + d[k])));
             }
         }
@@ -130,28 +140,22 @@ fn pyramid(rgba: &[u8], width: u32, height: u32) -> Vec<Level> {
     levels
 }
 
-/// Bilinear read of level `k` at the position of frame pixel (x, y).
-fn sample(level: &Level, k: usize, x: u32, y: u32) -> [f32; 3] {
-    if k == 0 {
-        return level.rgb[(y * level.w + x) as usize];
-    }
+/// Where frame coordinate `x` falls on level `k` (of `n` samples): the two samples read
+/// bilinearly and the weight of the second. Sample centres: level texel i covers frame pixels
+/// i·2^k … (i+1)·2^k − 1.
+fn tap(x: u32, k: usize, n: u32) -> (u32, u32, f32) {
     let s = (1u32 << k) as f32;
-    let fx = ((x as f32 + 0.5) / s - 0.5).clamp(0.0, (level.w - 1) as f32);
-    let fy = ((y as f32 + 0.5) / s - 0.5).clamp(0.0, (level.h - 1) as f32);
-    let (x0, y0) = (fx as u32, fy as u32);
-    let (x1, y1) = ((x0 + 1).min(level.w - 1), (y0 + 1).min(level.h - 1));
-    let (tx, ty) = (fx - x0 as f32, fy - y0 as f32);
-    let at = |xx: u32, yy: u32| level.rgb[(yy * level.w + xx) as usize];
-    let (a, b, c, d) = (at(x0, y0), at(x1, y0), at(x0, y1), at(x1, y1));
-    std::array::from_fn(|i| {
-        let top = a[i] + (b[i] - a[i]) * tx;
-        let bottom = c[i] + (d[i] - c[i]) * tx;
-        top + (bottom - top) * ty
-    })
+    let f = ((x as f32 + 0.5) / s - 0.5).clamp(0.0, (n - 1) as f32);
+    let i0 = f as u32;
+    (i0, (i0 + 1).min(n - 1), f - i0 as f32)
 }
 
 /// The frame low-passed by eccentricity around `gaze` (normalised). Pixels whose level is 0
 /// are copied exactly.
+///
+/// Row by row: each level a row needs is first interpolated vertically into a row buffer, so a
+/// pixel costs two horizontal reads per level, not a full bilinear lookup (the filter went
+/// from ~51 to ~24 ms a 720p frame here).
 pub fn low_pass(
     rgba: &[u8],
     width: u32,
@@ -168,24 +172,53 @@ pub fn low_pass(
         return rgba.to_vec();
     }
     let pyr = pyramid(rgba, width, height);
+    // Horizontal taps per level, the same for every row.
+    let xtaps: Vec<Vec<(u32, u32, f32)>> = pyr
+        .iter()
+        .enumerate()
+        .map(|(j, l)| (0..width).map(|x| tap(x, j + 1, l.w)).collect())
+        .collect();
+    let mut rows: Vec<Vec<[f32; 3]>> = pyr.iter().map(|l| vec![[0.0; 3]; l.w as usize]).collect();
     let mut out = rgba.to_vec();
     for y in 0..height {
-        for x in 0..width {
-            let i = (y * width + x) as usize;
-            let l = levels[i];
+        let row_levels = &levels[(y * width) as usize..((y + 1) * width) as usize];
+        let top = row_levels.iter().fold(0.0f32, |m, l| m.max(*l));
+        if top <= 0.0 {
+            continue;
+        }
+        // Levels 1..=ceil(top) are read in this row: interpolate them vertically once.
+        let needed = ((top.ceil() as usize).max(1)).min(MAX_LEVEL);
+        for (j, (level, row)) in pyr.iter().zip(rows.iter_mut()).enumerate().take(needed) {
+            let (y0, y1, ty) = tap(y, j + 1, level.h);
+            for (x, v) in row.iter_mut().enumerate() {
+                let (a, b) = (level.at(x as u32, y0), level.at(x as u32, y1));
+                *v = std::array::from_fn(|c| a[c] + (b[c] - a[c]) * ty);
+            }
+        }
+        let read = |k: usize, x: u32| -> [f32; 3] {
+            if k == 0 {
+                let i = ((y * width + x) * 4) as usize;
+                return std::array::from_fn(|c| f32::from(rgba[i + c]));
+            }
+            let (x0, x1, tx) = xtaps[k - 1][x as usize];
+            let (a, b) = (rows[k - 1][x0 as usize], rows[k - 1][x1 as usize]);
+            std::array::from_fn(|c| a[c] + (b[c] - a[c]) * tx)
+        };
+        for (x, &l) in row_levels.iter().enumerate() {
             if l <= 0.0 {
                 continue;
             }
             let k = (l as usize).min(MAX_LEVEL);
             let t = l - k as f32;
-            let a = sample(&pyr[k], k, x, y);
+            let a = read(k, x as u32);
             let b = if t > 0.0 && k < MAX_LEVEL {
-                sample(&pyr[k + 1], k + 1, x, y)
+                read(k + 1, x as u32)
             } else {
                 a
             };
+            let i = (y * width) as usize * 4 + x * 4;
             for c in 0..3 {
-                out[i * 4 + c] = (a[c] + (b[c] - a[c]) * t).round().clamp(0.0, 255.0) as u8;
+                out[i + c] = (a[c] + (b[c] - a[c]) * t).round().clamp(0.0, 255.0) as u8;
             }
         }
     }
@@ -263,6 +296,73 @@ mod tests {
             .map(|&(a, b)| variation(a, b))
             .collect();
         assert!(bands[0] > bands[1] && bands[1] > bands[2], "{bands:?}");
+    }
+
+    /// The filter read the direct way: every pixel's two levels each sampled bilinearly in
+    /// 2-D from the pyramid.
+    fn direct(rgba: &[u8], w: u32, h: u32, gaze: [f64; 2], v: &Viewing, p: &LowPass) -> Vec<u8> {
+        let levels = level_map(w, h, gaze, v, p);
+        let pyr = pyramid(rgba, w, h);
+        let read = |k: usize, x: u32, y: u32| -> [f32; 3] {
+            if k == 0 {
+                let i = ((y * w + x) * 4) as usize;
+                return std::array::from_fn(|c| f32::from(rgba[i + c]));
+            }
+            let l = &pyr[k - 1];
+            let ((x0, x1, tx), (y0, y1, ty)) = (tap(x, k, l.w), tap(y, k, l.h));
+            let (a, b, c, d) = (l.at(x0, y0), l.at(x1, y0), l.at(x0, y1), l.at(x1, y1));
+            std::array::from_fn(|i| {
+                let top = a[i] + (b[i] - a[i]) * tx;
+                top + (c[i] + (d[i] - c[i]) * tx - top) * ty
+            })
+        };
+        let mut out = rgba.to_vec();
+        for y in 0..h {
+            for x in 0..w {
+                let i = (y * w + x) as usize;
+                let l = levels[i];
+                if l <= 0.0 {
+                    continue;
+                }
+                let k = (l as usize).min(MAX_LEVEL);
+                let t = l - k as f32;
+                let a = read(k, x, y);
+                let b = if t > 0.0 && k < MAX_LEVEL {
+                    read(k + 1, x, y)
+                } else {
+                    a
+                };
+                for c in 0..3 {
+                    out[i * 4 + c] = (a[c] + (b[c] - a[c]) * t).round().clamp(0.0, 255.0) as u8;
+                }
+            }
+        }
+        out
+    }
+
+    #[test]
+    fn row_by_row_filtering_matches_direct_bilinear_reads() {
+        // Odd sizes, so every pyramid level has a repeated edge; gaze near a corner, so every
+        // level up to the coarsest is read.
+        for (w, h, gaze) in [
+            (301, 177, [0.1, 0.2]),
+            (640, 360, [0.5, 0.5]),
+            (97, 1, [0.0, 0.0]),
+        ] {
+            let v = Viewing::new(Display::default(), w, h);
+            let p = LowPass {
+                guard_deg: 1.0,
+                ..LowPass::default()
+            };
+            let img = noise(w, h);
+            let (fast, slow) = (
+                low_pass(&img, w, h, gaze, &v, &p),
+                direct(&img, w, h, gaze, &v, &p),
+            );
+            let worst = fast.iter().zip(&slow).map(|(a, b)| a.abs_diff(*b)).max();
+            assert!(worst <= Some(1), "{w}x{h}: {worst:?}");
+            assert_ne!(fast, img, "{w}x{h}: something was filtered");
+        }
     }
 
     #[test]
