@@ -187,7 +187,7 @@ pub fn low_pass(
             continue;
         }
         // Levels 1..=ceil(top) are read in this row: interpolate them vertically once.
-        let needed = ((top.ceil() as usize).max(1)).min(MAX_LEVEL);
+        let needed = (top.ceil() as usize).clamp(1, MAX_LEVEL);
         for (j, (level, row)) in pyr.iter().zip(rows.iter_mut()).enumerate().take(needed) {
             let (y0, y1, ty) = tap(y, j + 1, level.h);
             for (x, v) in row.iter_mut().enumerate() {
