@@ -94,6 +94,12 @@ pub fn load(a: LoadArgs) -> Result<()> {
     if a.encoding.inset_deg.is_some() && a.mix_codecs.contains(&fovea::protocol::Codec::H264) {
         bail!("--inset-deg sends JPEG or PNG insets; leave h264 out of --mix-codecs");
     }
+    if let Some(n) = counts.iter().find(|n| **n < a.mix_codecs.len()) {
+        bail!(
+            "--mix-codecs names {} codecs but a run has {n} sessions: every codec needs one",
+            a.mix_codecs.len()
+        );
+    }
     let duration = std::time::Duration::from_secs_f64(a.duration.clamp(1.0, 600.0));
     let runtime = tokio::runtime::Runtime::new()?;
     let mut reports = Vec::new();
