@@ -154,8 +154,8 @@ fn tap(x: u32, k: usize, n: u32) -> (u32, u32, f32) {
 /// are copied exactly.
 ///
 /// Row by row: each level a row needs is first interpolated vertically into a row buffer, so a
-/// pixel costs two horizontal reads per level, not a full bilinear lookup (the filter went
-/// from ~51 to ~24 ms a 720p frame here).
+/// pixel costs two horizontal reads per level, not a full bilinear lookup (this more than
+/// halved the filter's time at 720p: docs/encoding.md).
 pub fn low_pass(
     rgba: &[u8],
     width: u32,
@@ -218,7 +218,9 @@ pub fn low_pass(
             };
             let i = (y * width) as usize * 4 + x * 4;
             for c in 0..3 {
-                out[i + c] = (a[c] + (b[c] - a[c]) * t).round().clamp(0.0, 255.0) as u8;
+                // `as u8` saturates (and sends NaN to 0); + 0.5 rounds the non-negative blend
+                // without a libm call per channel.
+                out[i + c] = (a[c] + (b[c] - a[c]) * t + 0.5) as u8;
             }
         }
     }
