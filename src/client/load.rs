@@ -122,7 +122,7 @@ pub struct LoadReport {
 
 #[derive(Default)]
 struct SessionResult {
-    codec: String,
+    codec: &'static str,
     frames: u64,
     /// Image bytes received (the frame headers' `bytes`).
     bytes: u64,
@@ -249,48 +249,33 @@ fn by_codec(
     results: &[SessionResult],
     hists: &BTreeMap<String, Histogram<u64>>,
 ) -> BTreeMap<String, CodecStats> {
-    let mut out = BTreeMap::new();
-    let ran = |r: &&SessionResult| !r.connect_failed && !r.refused;
-    for r in results.iter().filter(ran) {
-        if out.contains_key(&r.codec) {
-            continue;
-        }
-        let mine: Vec<&SessionResult> = results
-            .iter()
-            .filter(ran)
-            .filter(|o| o.codec == r.codec)
-            .collect();
-        let stage = |name: &str| {
-            hists
-                .get(&format!("{}/{name}", r.codec))
-                .map_or_else(|| percentiles(&histogram()), percentiles)
-        };
-        let kbit_s: f64 = mine
-            .iter()
-            .map(|o| o.bytes as f64 * 8.0 / 1000.0 / o.active_s.max(1e-9))
-            .sum();
-        out.insert(
-            r.codec.clone(),
-            CodecStats {
+    let mut groups: BTreeMap<&str, Vec<&SessionResult>> = BTreeMap::new();
+    for r in results.iter().filter(|r| !r.connect_failed && !r.refused) {
+        groups.entry(r.codec).or_default().push(r);
+    }
+    groups
+        .into_iter()
+        .map(|(codec, mine)| {
+            let stage = |name: &str| {
+                hists
+                    .get(&format!("{codec}/{name}"))
+                    .map_or_else(|| percentiles(&histogram()), percentiles)
+            };
+            let kbit_s: f64 = mine
+                .iter()
+                .map(|o| o.bytes as f64 * 8.0 / 1000.0 / o.active_s.max(1e-9))
+                .sum();
+            let stats = CodecStats {
                 sessions: mine.len(),
                 frames: mine.iter().map(|o| o.frames).sum(),
                 latency_ms: stage("latency"),
                 render_ms: stage("render"),
                 encode_ms: stage("encode"),
                 kbit_s_per_session: kbit_s / mine.len() as f64,
-            },
-        );
-    }
-    out
-}
-
-fn codec_name(c: Codec) -> String {
-    match c {
-        Codec::Jpeg => "jpeg",
-        Codec::Png => "png",
-        Codec::H264 => "h264",
-    }
-    .to_string()
+            };
+            (codec.to_string(), stats)
+        })
+        .collect()
 }
 
 #[allow(clippy::too_many_arguments)]
@@ -304,7 +289,7 @@ async fn session(
     progress: Arc<impl Fn(usize, f64) + Send + Sync>,
 ) -> SessionResult {
     let mut result = SessionResult {
-        codec: codec_name(opts.hello.codec),
+        codec: opts.hello.codec.name(),
         ..SessionResult::default()
     };
     let link = super::link::Link::open(super::link::LinkOptions {
@@ -363,7 +348,7 @@ async fn session(
                     .and_then(|s| sent_at.lock().ok().and_then(|m| m.get(&s).copied()))
                     .map(|t| now - t);
                 if let Ok(mut hs) = hists.lock() {
-                    let codec = codec_name(h.codec);
+                    let codec = h.codec.name();
                     let mut rec = |k: &str, ms: f64| {
                         let us = (ms * 1000.0).max(1.0) as u64;
                         if let Some(hh) = hs.get_mut(k) {

@@ -233,19 +233,7 @@ mod tests {
     use crate::viewing::Display;
 
     fn noise(w: u32, h: u32) -> Vec<u8> {
-        let mut s = 12345u32;
-        (0..w * h * 4)
-            .map(|i| {
-                s ^= s << 13;
-                s ^= s >> 17;
-                s ^= s << 5;
-                if i % 4 == 3 {
-                    255
-                } else {
-                    (s >> 24) as u8
-                }
-            })
-            .collect()
+        crate::encode::noise_rgba((w * h) as usize, 12345)
     }
 
     #[test]

@@ -80,6 +80,24 @@ fn encode_png(rgba: &[u8], width: u32, height: u32) -> Result<Vec<u8>, EncodeErr
     Ok(out)
 }
 
+/// An opaque RGBA picture of xorshift noise: every byte value in every channel, reproducible
+/// from `seed` (non-zero), for the encoders' unit tests.
+#[cfg(test)]
+pub(crate) fn noise_rgba(pixels: usize, mut seed: u32) -> Vec<u8> {
+    (0..pixels * 4)
+        .map(|i| {
+            seed ^= seed << 13;
+            seed ^= seed >> 17;
+            seed ^= seed << 5;
+            if i % 4 == 3 {
+                255
+            } else {
+                (seed >> 24) as u8
+            }
+        })
+        .collect()
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

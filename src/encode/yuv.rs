@@ -261,19 +261,7 @@ mod tests {
     fn the_fixed_point_matches_exact_arithmetic_but_at_rounding_ties() {
         // Every byte value in every channel, scrambled over a 256×256 picture.
         let (w, h) = (256, 256);
-        let mut seed = 0x2545_f491_u32;
-        let rgba: Vec<u8> = (0..w * h * 4)
-            .map(|i| {
-                seed ^= seed << 13;
-                seed ^= seed >> 17;
-                seed ^= seed << 5;
-                if i % 4 == 3 {
-                    255
-                } else {
-                    (seed >> 24) as u8
-                }
-            })
-            .collect();
+        let rgba = crate::encode::noise_rgba(w * h, 0x2545_f491);
         let (got, want) = (convert(&rgba, w, h), exact(&rgba, w, h));
         let (mut off, mut n) = (0usize, 0usize);
         for (a, b) in [(&got.0, &want.0), (&got.1, &want.1), (&got.2, &want.2)] {

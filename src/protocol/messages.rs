@@ -98,6 +98,17 @@ pub enum Codec {
     H264,
 }
 
+impl Codec {
+    /// The codec's name on the wire (what `"codec"` carries).
+    pub fn name(self) -> &'static str {
+        match self {
+            Codec::Jpeg => "jpeg",
+            Codec::Png => "png",
+            Codec::H264 => "h264",
+        }
+    }
+}
+
 /// One eye-tracker sample. `t_ms` is on the client's own clock; the server echoes it so the
 /// Moves the session's camera (from the scene's own). Every field is optional; they apply in
 /// the order `reset`, `pose`, `orbit_deg`, `pan`, `dolly`.
@@ -232,5 +243,17 @@ impl From<super::ProtocolError> for ServerMessage {
             code: e.code,
             message: e.message,
         })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::Codec;
+
+    #[test]
+    fn a_codecs_name_is_its_wire_spelling() {
+        for c in [Codec::Jpeg, Codec::Png, Codec::H264] {
+            assert_eq!(serde_json::to_value(c).ok(), Some(c.name().into()));
+        }
     }
 }
