@@ -87,7 +87,8 @@ fn the_codec_sweep_measures_every_configuration_on_the_same_frames() {
             "H.264",
             "JPEG + low-pass",
             "H.264 + low-pass",
-            "JPEG + inset 20°"
+            "JPEG + inset 20°",
+            "H.264 + inset 20°"
         ]
     );
     let jpeg = &report.equal_quality[0];

@@ -4,7 +4,7 @@
 // a lost connection is retried with backoff, and a full server is retried too.
 
 import { H264Player, h264Supported } from './h264.js';
-import { composeInset } from './inset.js';
+import { composeInset, composePacked } from './inset.js';
 import { Stats, overlayText, sparkline } from './overlay.js';
 import { SyntheticEye } from './synthetic-eye.js';
 import { bindControls, controls, drawFovea, showBanner, hideBanner, setStatus } from './ui.js';
@@ -31,7 +31,9 @@ const state = {
   pending: null,      // decoded frame waiting for the next animation frame
   player: null,       // the H.264 decoder of an h264 session
   codecNote: null,    // why the page shows another codec than the one chosen
-  lastImage: null,    // an inset frame's image bytes (both images), for the browser tests
+  lastImage: null,    // an inset frame's image bytes (both images), or its decoded H.264
+                      // picture where keepPictures is set: for the browser tests
+  keepPictures: false,
   drawScheduled: false,
   stats: new Stats(),
   errors: [],
@@ -90,7 +92,7 @@ export function connect() {
     if (state.ws !== ws) return;
     send({
       type: 'hello', v: 1, scene: controls.scene.value, width, height, preset: controls.preset.value,
-      codec, quality: 85, max_in_flight: 2, ...encodingFields(controls.encoding.value, codec),
+      codec, quality: 85, max_in_flight: 2, ...encodingFields(controls.encoding.value),
     });
     sendSettings();
   };
@@ -119,16 +121,10 @@ async function chooseCodec(chosen, width, height) {
   return 'jpeg';
 }
 
-// The hello's foveated-encoding fields for the page's encoding choice. An inset needs whole
-// images per frame (JPEG or PNG): with H.264 the page says so and sends plain frames.
-function encodingFields(choice, codec) {
+// The hello's foveated-encoding fields for the page's encoding choice.
+function encodingFields(choice) {
   if (choice === 'lowpass') return { foveated_encoding: true };
-  if (choice !== 'inset') return {};
-  if (codec === 'h264') {
-    showBanner('the inset needs JPEG or PNG frames: H.264 sends whole frames', 'info', 6000);
-    return {};
-  }
-  return { inset_deg: INSET_DEG };
+  return choice === 'inset' ? { inset_deg: INSET_DEG } : {};
 }
 
 function scheduleRetry(reason, full) {
@@ -165,7 +161,7 @@ function onText(text) {
     fill(controls.preset, msg.presets);
     if (msg.codec === 'h264') {
       state.player = new H264Player(msg.width, msg.height, {
-        onPicture: present,
+        onPicture: presentPicture,
         onDropped: (header) => { state.stats.dropped += 1; ack(header.frame, true); },
         askKeyframe: () => send({ type: 'keyframe' }),
       });
@@ -220,6 +216,24 @@ async function onFrame(buffer) {
   }
   // An inset frame's bytes stay with it, for the browser test that checks its composition.
   present(header, bitmap, header.inset ? bytes : null);
+}
+
+// A decoded H.264 picture: an inset frame's picture holds both parts, composed here (the
+// browser tests set `keepPictures` to check the composition against the picture itself).
+async function presentPicture(header, picture) {
+  if (!header.inset) return present(header, picture);
+  let bitmap, image = null;
+  try {
+    if (state.keepPictures) image = await createImageBitmap(picture);
+    bitmap = composePacked(header, picture);
+  } catch (e) {
+    console.warn(`frame ${header.frame} did not compose`, e);
+    ack(header.frame, true);
+    return;
+  } finally {
+    picture.close();
+  }
+  present(header, bitmap, image);
 }
 
 // Draw only the newest frame; anything it overtakes is acknowledged as dropped so its

@@ -16,7 +16,8 @@ pub struct CodecConfig {
     pub h264_kbps: Option<u32>,
     /// The eccentricity-matched low-pass before encoding.
     pub low_pass: bool,
-    /// A downscaled frame plus a foveal inset this many degrees wide (JPEG).
+    /// A downscaled frame plus a foveal inset this many degrees wide (with H.264 both packed
+    /// into one picture).
     pub inset_deg: Option<f64>,
 }
 
@@ -53,7 +54,7 @@ impl CodecConfig {
     }
 }
 
-/// JPEG q50–95 and H.264 at 500–8000 kbit/s, each plain and low-passed, and JPEG with a 20°
+/// JPEG q50–95 and H.264 at 500–8000 kbit/s, each plain and low-passed, and both with a 20°
 /// inset: the encoder comparison issue 16 asks for.
 pub fn codec_configs() -> Vec<CodecConfig> {
     let mut out = Vec::new();
@@ -79,6 +80,13 @@ pub fn codec_configs() -> Vec<CodecConfig> {
     }
     for q in [50u8, 75, 85, 95] {
         out.push(jpeg(q, false, Some(20.0)));
+    }
+    for kbps in [500u32, 1000, 2000, 4000, 8000] {
+        out.push(CodecConfig {
+            h264_kbps: Some(kbps),
+            codec: Codec::H264,
+            ..jpeg(0, false, Some(20.0))
+        });
     }
     for c in &mut out {
         let knob = match c.h264_kbps {
@@ -107,9 +115,10 @@ mod tests {
             "JPEG q85 + low-pass",
             "H.264 500 kbit/s + low-pass",
             "JPEG q85 + inset 20°",
+            "H.264 1000 kbit/s + inset 20°",
         ] {
             assert!(names.contains(&n), "{n} in {names:?}");
         }
-        assert_eq!(names.iter().filter(|n| n.contains("inset")).count(), 4);
+        assert_eq!(names.iter().filter(|n| n.contains("inset")).count(), 9);
     }
 }

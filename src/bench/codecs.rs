@@ -11,7 +11,7 @@ use super::codecs_report::{CodecReport, CodecRow, FloorRow};
 use super::report::{Machine, Spread};
 use crate::encode::foveated::{low_pass, LowPass};
 use crate::encode::h264::{H264Config, H264Stream, DEFAULT_KEYFRAME_S};
-use crate::encode::{encode, inset, yuv, EncodeError};
+use crate::encode::{encode, inset, inset_packed, yuv, EncodeError};
 use crate::gaze::formats::Recording;
 use crate::protocol::{Codec, Display};
 use crate::quality::{flip_map, foveal_mask, pixels_per_degree, pooled_mean};
@@ -244,22 +244,37 @@ fn measure(
         } else {
             rgba.clone()
         };
+        // Timed as frames at FPS: the rate control spends the bitrate over that time.
+        let ms = (k as f64 * 1e3 / FPS) as u64;
+        let mut h264 = |s: &mut H264Stream, picture: &[u8], pw: u32, ph: u32| {
+            let f = s.encode_at(picture, pw, ph, ms).map_err(encode_err)?;
+            t.encode_ms.push(start.elapsed().as_secs_f64() * 1e3);
+            let dec = decoder
+                .as_mut()
+                .ok_or_else(|| decode_err("no decoder".into()))?;
+            let pic = dec
+                .decode(&f.bytes)
+                .map_err(|e| decode_err(e.to_string()))?
+                .ok_or_else(|| decode_err("no picture for a whole frame".into()))?;
+            // Rounded, as a browser's decoder shows it (openh264's own truncates).
+            Ok::<_, CodecBenchError>((yuv::picture_to_rgba(&pic), f.bytes.len(), f.keyframe))
+        };
         let (bytes, keyframe) = match (&mut stream, config.inset_deg) {
-            (Some(s), _) => {
-                // Timed as frames at FPS: the rate control spends the bitrate over that time.
-                let ms = (k as f64 * 1e3 / FPS) as u64;
-                let f = s.encode_at(&input, w, h, ms).map_err(encode_err)?;
-                t.encode_ms.push(start.elapsed().as_secs_f64() * 1e3);
-                let dec = decoder
-                    .as_mut()
-                    .ok_or_else(|| decode_err("no decoder".into()))?;
-                let pic = dec
-                    .decode(&f.bytes)
-                    .map_err(|e| decode_err(e.to_string()))?
-                    .ok_or_else(|| decode_err("no picture for a whole frame".into()))?;
-                // Rounded, as a browser's decoder shows it (openh264's own truncates).
-                shown = yuv::picture_to_rgba(&pic);
-                (f.bytes.len(), f.keyframe)
+            (Some(s), None) => {
+                let (picture, n, key) = h264(s, &input, w, h)?;
+                shown = picture;
+                (n, key)
+            }
+            (Some(s), Some(deg)) => {
+                // Both parts in one picture of the stream, as an h264 inset session sends them.
+                let plan = inset_packed::follow(s.held_inset(), w, h, *g, viewing, deg, &acuity);
+                let (base, crop) = inset::split(&input, w, h, &plan);
+                let (packed, l) = inset_packed::pack(&base, &crop, &plan, w, h);
+                let (picture, n, key) = h264(s, &packed, l.width, l.height)?;
+                s.hold_inset(plan);
+                let (b_px, i_px) = inset_packed::unpack(&picture, &l, &plan, w, h);
+                shown = inset::compose(&b_px, &i_px, &plan, w, h);
+                (n, key)
             }
             (None, Some(deg)) => {
                 let plan = inset::plan(w, h, *g, viewing, deg, &acuity);

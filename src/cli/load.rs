@@ -91,9 +91,6 @@ pub fn load(a: LoadArgs) -> Result<()> {
     if counts.iter().any(|n| *n == 0 || *n > 256) {
         bail!("session counts run from 1 to 256");
     }
-    if a.encoding.inset_deg.is_some() && a.mix_codecs.contains(&fovea::protocol::Codec::H264) {
-        bail!("--inset-deg sends JPEG or PNG insets; leave h264 out of --mix-codecs");
-    }
     if let Some(n) = counts.iter().find(|n| **n < a.mix_codecs.len()) {
         bail!(
             "--mix-codecs names {} codecs but a run has {n} sessions: every codec needs one",

@@ -86,8 +86,8 @@ pub struct EncodingArgs {
     /// Low-pass the periphery to what the eye resolves before encoding (any codec).
     #[arg(long)]
     pub foveated_encoding: bool,
-    /// Inset frames (jpeg, png): a downscaled whole frame plus a full-resolution square this
-    /// many degrees wide (4–90) around the gaze.
+    /// Inset frames: a downscaled whole frame plus a full-resolution square this many degrees
+    /// wide (4–90) around the gaze (with h264 both packed into one picture of the stream).
     #[arg(long)]
     pub inset_deg: Option<f64>,
 }

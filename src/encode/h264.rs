@@ -82,6 +82,8 @@ pub struct H264Stream {
     started: Instant,
     last_ms: u64,
     yuv: Option<I420>,
+    /// Inset sessions: where the previous picture's inset lay (`inset_packed::follow`).
+    inset: Option<super::inset::InsetPlan>,
 }
 
 /// One encoded frame: Annex B NAL units.
@@ -112,7 +114,18 @@ impl H264Stream {
             started: Instant::now(),
             last_ms: 0,
             yuv: None,
+            inset: None,
         }
+    }
+
+    /// Where the previous picture's inset lay, for an inset session.
+    pub fn held_inset(&self) -> Option<&super::inset::InsetPlan> {
+        self.inset.as_ref()
+    }
+
+    /// Records where this picture's inset lies.
+    pub fn hold_inset(&mut self, plan: super::inset::InsetPlan) {
+        self.inset = Some(plan);
     }
 
     /// The next frame is a keyframe (a client's decoder failed, or it resized).

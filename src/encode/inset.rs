@@ -59,16 +59,23 @@ pub fn plan(
         let start = (c - f64::from(side) / 2.0).round().max(0.0) as u32;
         start.min(max - side)
     };
-    let e_core = (0.5 - FEATHER) * inset_deg;
-    let mar = acuity.mar_slope * e_core + acuity.mar_w0_deg;
-    let scale = if p > 0.0 { (mar / p).floor() } else { 1.0 };
     InsetPlan {
         x: place(cx, w, width),
         y: place(cy, h, height),
         width: w,
         height: h,
-        scale: (scale.max(1.0) as u32).min(MAX_SCALE),
+        scale: base_scale(viewing, inset_deg, acuity, 0.0),
     }
+}
+
+/// The base's downscale when the gaze may lie up to `drift_deg` from the inset's centre: the
+/// core's edge is then at least e_core − drift from it.
+pub fn base_scale(viewing: &Viewing, inset_deg: f64, acuity: &LowPass, drift_deg: f64) -> u32 {
+    let p = viewing.pixel_angle_deg();
+    let e_core = ((0.5 - FEATHER) * inset_deg - drift_deg).max(0.0);
+    let mar = acuity.mar_slope * e_core + acuity.mar_w0_deg;
+    let scale = if p > 0.0 { (mar / p).floor() } else { 1.0 };
+    (scale.max(1.0) as u32).min(MAX_SCALE)
 }
 
 /// The base (box-filtered by `plan.scale`) and the inset (cropped), both RGBA8.

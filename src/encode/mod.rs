@@ -4,6 +4,7 @@
 pub mod foveated;
 pub mod h264;
 pub mod inset;
+pub mod inset_packed;
 pub mod yuv;
 
 use crate::protocol::Codec;

@@ -84,6 +84,7 @@ pub struct FrameHeader {
 /// whole frame at `base_width`×`base_height`, to be scaled up to the frame's size; the rest is
 /// the inset, `width`×`height` pixels at (`x`, `y`) of the frame, drawn over it with its
 /// sides feathered over `feather` of its size (sides on the frame's edge are not feathered).
+/// An H.264 inset frame is one picture holding both (`packed` says where; `inset_bytes` 0).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct InsetHeader {
     pub x: u32,
@@ -94,6 +95,8 @@ pub struct InsetHeader {
     pub base_height: u32,
     pub inset_bytes: usize,
     pub feather: f64,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub packed: Option<crate::encode::inset_packed::PackedLayout>,
 }
 
 /// Where a scene's radiosity solve stood when a frame used it (the wire's own type; the
@@ -174,6 +177,7 @@ mod tests {
                 base_height: 12,
                 inset_bytes: 1,
                 feather: 0.125,
+                packed: None,
             }),
             sampled: 1.0,
             samples: 17,

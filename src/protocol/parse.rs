@@ -178,12 +178,6 @@ fn validate_hello(h: &Hello, limits: &Limits) -> Result<(), ProtocolError> {
     if let Some(d) = h.inset_deg {
         let (lo, hi) = crate::encode::inset::INSET_DEG_RANGE;
         in_range("inset_deg", d, lo, hi)?;
-        if h.codec == super::Codec::H264 {
-            return Err(ProtocolError::new(
-                ErrorCode::OutOfRange,
-                "inset_deg needs codec jpeg or png: an h264 session sends whole frames (use foveated_encoding)",
-            ));
-        }
     }
     if h.codec == super::Codec::H264 && (h.width % 2 != 0 || h.height % 2 != 0) {
         return Err(ProtocolError::new(

@@ -10,7 +10,7 @@ use super::timing::FrameTimes;
 use crate::encode;
 use crate::encode::foveated::{self, LowPass};
 use crate::encode::h264::H264Stream;
-use crate::encode::inset;
+use crate::encode::{inset, inset_packed};
 use crate::protocol::{
     encode_frame, Codec, ErrorCode, FrameHeader, GazeUsed, InsetHeader, ProtocolError,
     SolveProgress,
@@ -46,8 +46,8 @@ impl FrameJob {
     ) -> FrameJob {
         let viewing = || Viewing::new(hello.display, hello.width, hello.height);
         // H.264 takes I420: the GPU converts where that is faster, unless the CPU low-pass
-        // needs RGB first.
-        if hello.codec == Codec::H264 && !hello.foveated_encoding {
+        // or the inset's packing needs RGB first.
+        if hello.codec == Codec::H264 && !hello.foveated_encoding && hello.inset_deg.is_none() {
             request.readback = crate::render::Readback::I420Preferred;
         }
         FrameJob {
@@ -114,15 +114,18 @@ pub async fn make(render: RenderHandle, job: FrameJob) -> Result<MadeFrame, Fram
             None => rgba,
         };
         let out = match (codec, stream, inset) {
-            (Codec::H264, Some(stream), _) => stream
+            (Codec::H264, Some(stream), inset) => stream
                 .lock()
                 .map_err(|_| encode::EncodeError::H264("the stream's lock was poisoned".into()))
-                .and_then(|mut s| match &i420 {
+                .and_then(|mut s| match (&i420, inset) {
+                    (_, Some((deg, viewing))) => {
+                        encode_packed(&mut s, &rgba, w, h, g, &viewing, deg)
+                    }
                     // Converted on the GPU (no low-pass: that needs RGB).
-                    Some(planes) => s.encode_i420(planes, w, h),
-                    None => s.encode(&rgba, w, h),
+                    (Some(planes), None) => s.encode_i420(planes, w, h).map(|f| (f, None)),
+                    (None, None) => s.encode(&rgba, w, h).map(|f| (f, None)),
                 })
-                .map(|f| (f.bytes, Some(f.keyframe), None)),
+                .map(|(f, i)| (f.bytes, Some(f.keyframe), i)),
             (_, _, Some((deg, viewing))) => {
                 encode_inset(&rgba, w, h, g, &viewing, deg, codec, quality)
                     .map(|(b, i)| (b, None, Some(i)))
@@ -190,18 +193,51 @@ fn encode_inset(
     let (bw, bh) = plan.base_size(w, h);
     let mut bytes = encode::encode(&base, bw, bh, codec, quality)?;
     let inset_bytes = encode::encode(&crop, plan.width, plan.height, codec, quality)?;
-    let header = InsetHeader {
+    let header = inset_header(&plan, w, h, inset_bytes.len(), None);
+    bytes.extend_from_slice(&inset_bytes);
+    Ok((bytes, header))
+}
+
+/// An H.264 inset frame: the base and the inset packed into one picture of the session's
+/// stream (`encode::inset_packed`), and the header that says where each lies.
+fn encode_packed(
+    stream: &mut H264Stream,
+    rgba: &[u8],
+    w: u32,
+    h: u32,
+    gaze: [f64; 2],
+    viewing: &Viewing,
+    inset_deg: f64,
+) -> Result<(encode::h264::H264Frame, Option<InsetHeader>), encode::EncodeError> {
+    let held = stream.held_inset();
+    let plan = inset_packed::follow(held, w, h, gaze, viewing, inset_deg, &LowPass::default());
+    let (base, crop) = inset::split(rgba, w, h, &plan);
+    let (picture, layout) = inset_packed::pack(&base, &crop, &plan, w, h);
+    let frame = stream.encode(&picture, layout.width, layout.height)?;
+    stream.hold_inset(plan);
+    let header = inset_header(&plan, w, h, 0, Some(layout));
+    Ok((frame, Some(header)))
+}
+
+fn inset_header(
+    plan: &inset::InsetPlan,
+    w: u32,
+    h: u32,
+    inset_bytes: usize,
+    packed: Option<inset_packed::PackedLayout>,
+) -> InsetHeader {
+    let (base_width, base_height) = plan.base_size(w, h);
+    InsetHeader {
         x: plan.x,
         y: plan.y,
         width: plan.width,
         height: plan.height,
-        base_width: bw,
-        base_height: bh,
-        inset_bytes: inset_bytes.len(),
+        base_width,
+        base_height,
+        inset_bytes,
         feather: inset::FEATHER,
-    };
-    bytes.extend_from_slice(&inset_bytes);
-    Ok((bytes, header))
+        packed,
+    }
 }
 
 /// Whether `message` is the first failure of its kind (the message up to its first colon) the
