@@ -39,3 +39,67 @@ fn text_logs_to_a_pipe_have_no_colour_codes() {
     assert!(stderr.contains("GPU adapter chosen"), "{stderr}");
     assert!(!stderr.contains('\u{1b}'), "ANSI codes in:\n{stderr}");
 }
+
+/// A server asked for JSON logs writes nothing else to stderr, even while an H.264 session
+/// starts its encoder (openh264 printed a raw warning line per stream before its log level was
+/// set ahead of its initialisation).
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn an_h264_session_leaves_the_json_log_json() {
+    use tokio::io::{AsyncBufReadExt, AsyncReadExt, BufReader};
+    let mut server = tokio::process::Command::new(env!("CARGO_BIN_EXE_fovea"))
+        .args(["--log-format", "json", "serve", "--addr", "127.0.0.1:0"])
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .kill_on_drop(true)
+        .spawn()
+        .expect("fovea runs");
+    let mut stdout = BufReader::new(server.stdout.take().unwrap()).lines();
+    let line = tokio::time::timeout(std::time::Duration::from_secs(120), stdout.next_line())
+        .await
+        .expect("listens within 2 min")
+        .unwrap()
+        .expect("a line");
+    let url = line
+        .split("http://")
+        .nth(1)
+        .map(|a| format!("ws://{}ws", a.trim()))
+        .unwrap_or_else(|| panic!("no address in {line}"));
+    let mut c = fovea::client::Client::connect(&url).await.unwrap();
+    c.hello(&fovea::protocol::Hello {
+        scene: "bunny".into(),
+        width: 64,
+        height: 48,
+        codec: fovea::protocol::Codec::H264,
+        ..Default::default()
+    })
+    .await
+    .unwrap();
+    loop {
+        match c.next_event(std::time::Duration::from_secs(60)).await {
+            Ok(fovea::client::Event::Frame { header, .. }) => {
+                assert_eq!(header.keyframe, Some(true));
+                break;
+            }
+            Ok(fovea::client::Event::Error(e)) => panic!("{e:?}"),
+            Ok(_) => continue,
+            Err(e) => panic!("no frame: {e}"),
+        }
+    }
+    drop(c);
+    server.start_kill().unwrap();
+    let mut stderr = String::new();
+    server
+        .stderr
+        .take()
+        .unwrap()
+        .read_to_string(&mut stderr)
+        .await
+        .unwrap();
+    for l in stderr.lines().filter(|l| !l.trim().is_empty()) {
+        assert!(
+            serde_json::from_str::<serde_json::Value>(l).is_ok(),
+            "not JSON: {l}"
+        );
+    }
+    assert!(stderr.contains("GPU adapter chosen"), "{stderr}");
+}

@@ -71,6 +71,31 @@ fn api() -> Result<OpenH264API, EncodeError> {
     Ok(OpenH264API::from_source())
 }
 
+/// Silences openh264's own log before its first frame initialises it. The crate sets the
+/// level only after initialising, and initialising with frame skipping off prints a warning
+/// to stderr ("bitrate can't be controlled … without enabling skip frame") once per stream:
+/// a raw line in the server's log (which `--log-format json` promises is JSON) for every
+/// H.264 session. We keep skipping off on purpose (every frame is shown), and the quantiser
+/// range bounds the rate instead (docs/encoding.md).
+fn quiet(encoder: &mut Encoder) {
+    let mut level = openh264_sys2::WELS_LOG_QUIET as std::os::raw::c_int;
+    // SAFETY: the encoder was created by `with_api_config` and is not yet initialised;
+    // openh264 accepts this option before initialisation (welsEncoderExt.cpp, SetOption), and
+    // reads an int through the pointer, which lives for the call.
+    let rc = unsafe {
+        encoder.raw_api().set_option(
+            openh264_sys2::ENCODER_OPTION_TRACE_LEVEL,
+            std::ptr::addr_of_mut!(level).cast(),
+        )
+    };
+    if rc != 0 {
+        tracing::debug!(
+            rc,
+            "openh264 refused its log level; its warnings may show on stderr"
+        );
+    }
+}
+
 /// One session's encoder and its keyframe bookkeeping.
 pub struct H264Stream {
     config: H264Config,
@@ -167,8 +192,9 @@ impl H264Stream {
                 .num_threads(1)
                 // Full range, as `encode::yuv` converts: the decoder must know.
                 .vui(VuiConfig::bt601().full_range(true));
-            let encoder = Encoder::with_api_config(api()?, config)
+            let mut encoder = Encoder::with_api_config(api()?, config)
                 .map_err(|e| EncodeError::H264(e.to_string()))?;
+            quiet(&mut encoder);
             self.encoder = Some(encoder);
             self.size = (width, height);
             self.keyframe_asked = true;
