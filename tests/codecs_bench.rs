@@ -88,7 +88,9 @@ fn the_codec_sweep_measures_every_configuration_on_the_same_frames() {
             "JPEG + low-pass",
             "H.264 + low-pass",
             "JPEG + inset 20°",
-            "H.264 + inset 20°"
+            "H.264 + inset 20°",
+            "JPEG + inset 16°",
+            "H.264 + inset 16°"
         ]
     );
     let jpeg = &report.equal_quality[0];

@@ -3,6 +3,7 @@
 
 use serde::{Deserialize, Serialize};
 
+use crate::encode::foveated::LowPass;
 use crate::protocol::Codec;
 
 /// How each frame is encoded.
@@ -55,7 +56,7 @@ impl CodecConfig {
 }
 
 /// JPEG q50–95 and H.264 at 500–8000 kbit/s, each plain and low-passed, and both with a 20°
-/// inset: the encoder comparison issue 16 asks for.
+/// and a 16° inset: the encoder comparison issue 16 asks for.
 pub fn codec_configs() -> Vec<CodecConfig> {
     let mut out = Vec::new();
     let jpeg = |q: u8, low_pass: bool, inset_deg: Option<f64>| CodecConfig {
@@ -78,15 +79,20 @@ pub fn codec_configs() -> Vec<CodecConfig> {
             });
         }
     }
-    for q in [50u8, 75, 85, 95] {
-        out.push(jpeg(q, false, Some(20.0)));
-    }
-    for kbps in [500u32, 1000, 2000, 4000, 8000] {
-        out.push(CodecConfig {
-            h264_kbps: Some(kbps),
-            codec: Codec::H264,
-            ..jpeg(0, false, Some(20.0))
-        });
+    // The page's 20°, and the narrowest inset whose core holds the 5° judged fovea wherever a
+    // video inset is held (16°: `inset_packed::narrowest_deg`).
+    let narrowest = crate::encode::inset_packed::narrowest_deg(LowPass::default().guard_deg);
+    for deg in [20.0, narrowest] {
+        for q in [50u8, 75, 85, 95] {
+            out.push(jpeg(q, false, Some(deg)));
+        }
+        for kbps in [500u32, 1000, 2000, 4000, 8000] {
+            out.push(CodecConfig {
+                h264_kbps: Some(kbps),
+                codec: Codec::H264,
+                ..jpeg(0, false, Some(deg))
+            });
+        }
     }
     for c in &mut out {
         let knob = match c.h264_kbps {
@@ -119,6 +125,7 @@ mod tests {
         ] {
             assert!(names.contains(&n), "{n} in {names:?}");
         }
-        assert_eq!(names.iter().filter(|n| n.contains("inset")).count(), 9);
+        assert_eq!(names.iter().filter(|n| n.contains("inset 20°")).count(), 9);
+        assert_eq!(names.iter().filter(|n| n.contains("inset 16°")).count(), 9);
     }
 }

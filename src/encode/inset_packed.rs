@@ -38,6 +38,13 @@ pub struct PackedLayout {
 /// encoder sees the same picture; a saccade elsewhere moves it.
 pub const HOLD_DEG: f64 = 1.0;
 
+/// The narrowest inset, degrees, whose unfeathered core holds everything within `guard_deg`
+/// of the gaze wherever [`follow`] puts it (up to [`HOLD_DEG`] off): 2·(guard + hold)/(1 − 2·
+/// FEATHER). For the low-pass's 5° guard, 16°.
+pub fn narrowest_deg(guard_deg: f64) -> f64 {
+    2.0 * (guard_deg + HOLD_DEG) / (1.0 - 2.0 * inset::FEATHER)
+}
+
 /// Where a video frame's inset goes, given the one the stream's previous picture held: that one
 /// while the gaze stays within [`HOLD_DEG`] of its centre (and the frame is the same size),
 /// else a fresh plan with its corner on the 16-pixel grid (so its blocks line up with the
@@ -244,6 +251,10 @@ mod tests {
                 );
             }
         }
+        // The narrowest inset for the 5° guard: 16°, its core exactly 5° + the hold wide.
+        let d = narrowest_deg(LowPass::default().guard_deg);
+        assert!((d - 16.0).abs() < 1e-12, "{d}");
+        assert!(((0.5 - crate::encode::inset::FEATHER) * d - 6.0).abs() < 1e-12);
         // The base's scale allows for the offsets: never coarser than a centred inset's.
         assert!(first.scale <= plan(w, h, [0.5, 0.5], &v, 20.0, &a).scale);
     }
