@@ -219,6 +219,7 @@ fn encode_packed(
     Ok((frame, Some(header)))
 }
 
+/// The header of an inset frame laid out by `plan` on a `w`×`h` frame.
 fn inset_header(
     plan: &inset::InsetPlan,
     w: u32,
