@@ -345,3 +345,47 @@ async fn ctrl_c_mid_replay_leaves_complete_outputs() {
     let _ = std::fs::remove_dir_all(&out);
     shutdown.stop().await;
 }
+
+/// `--save-frames` writes each frame as the file it is: an H.264 replay's frames are one raw
+/// stream that a decoder plays from its first (key)frame to its last.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn an_h264_replay_saves_a_playable_stream() {
+    let (url, shutdown) = server(None).await;
+    let out = std::env::temp_dir().join(format!("fovea-saved-h264-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&out);
+    let recording = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("assets/gaze/eyelink_500hz_1920x1200.csv");
+    let run = tokio::process::Command::new(env!("CARGO_BIN_EXE_fovea"))
+        .arg("replay")
+        .arg(&recording)
+        .args(["--screen", "1920x1200", "--url", &url, "--scene", "bunny"])
+        .args(["--size", "96x64", "--preset", "fast", "--codec", "h264"])
+        .args(["--duration", "1.5", "--save-frames", "--out"])
+        .arg(&out)
+        .output()
+        .await
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&run.stderr);
+    assert!(run.status.success(), "{stderr}");
+    let rows = std::fs::read_to_string(out.join("frames.csv"))
+        .unwrap()
+        .lines()
+        .count()
+        - 1;
+    assert!(rows >= 2, "{rows} frames");
+    let stream = std::fs::read(out.join("frames/stream-0.h264")).unwrap();
+    let mut decoder = openh264::decoder::Decoder::new().unwrap();
+    let mut pictures = 0;
+    for nal in openh264::nal_units(&stream) {
+        if let Ok(Some(_)) = decoder.decode(nal) {
+            pictures += 1;
+        }
+    }
+    assert_eq!(pictures, rows, "every frame decodes from the saved stream");
+    assert!(
+        !out.join("frames/000001.jpg").exists(),
+        "no .jpg of H.264 bytes"
+    );
+    let _ = std::fs::remove_dir_all(&out);
+    shutdown.stop().await;
+}

@@ -173,7 +173,8 @@ pub struct ReplayArgs {
     pub size: (u32, u32),
     #[command(flatten)]
     pub encoding: super::parse::EncodingArgs,
-    /// Save every received frame as DIR/frames/NNNNNN.jpg.
+    /// Save every received frame in DIR/frames: NNNNNN.jpg or .png (an inset frame as
+    /// NNNNNN-base and NNNNNN-inset), H.264 as one raw stream per connection, stream-C.h264.
     #[arg(long)]
     pub save_frames: bool,
 }
@@ -278,12 +279,8 @@ pub fn replay(a: ReplayArgs) -> Result<()> {
     )?;
     if a.save_frames {
         let dir = a.out.join("frames");
-        std::fs::create_dir_all(&dir)?;
-        for f in &frames {
-            if let Some(img) = &f.image {
-                std::fs::write(dir.join(format!("{:06}.jpg", f.frame)), img)?;
-            }
-        }
+        fovea::client::saved_frames::save_frames(&dir, &frames)
+            .with_context(|| format!("saving frames in {}", dir.display()))?;
     }
     println!("{}", serde_json::to_string_pretty(&summary)?);
     eprintln!("wrote {}/frames.csv and summary.json", a.out.display());

@@ -6,5 +6,6 @@ mod connection;
 pub mod link;
 pub mod load;
 pub mod replay;
+pub mod saved_frames;
 
 pub use connection::{Client, ClientError, Event};

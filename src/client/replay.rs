@@ -62,6 +62,12 @@ pub struct FrameRecord {
     pub server_samples: u64,
     #[serde(skip)]
     pub image: Option<Vec<u8>>,
+    /// What the image bytes are (`saved_frames` writes each as the file it is).
+    #[serde(skip)]
+    pub codec: crate::protocol::Codec,
+    /// Inset frames of JPEG or PNG: the second image's length (the first is the base).
+    #[serde(skip)]
+    pub inset_bytes: Option<usize>,
 }
 
 #[derive(Debug, Clone, Serialize)]
@@ -255,6 +261,8 @@ pub async fn replay(
                     bytes: image.len(),
                     server_samples: h.samples,
                     image: keep.then_some(image),
+                    codec: h.codec,
+                    inset_bytes: h.inset.map(|i| i.inset_bytes).filter(|n| *n > 0),
                 });
             }
             frames
