@@ -4,7 +4,8 @@
 //! placement is in the session's frames, docs/protocol.md); H.264 frames are not images on
 //! their own (each P-frame refers to the ones before it), so a connection's frames are
 //! appended in order to one Annex B stream, `stream-C.h264` (C: the connection, 0 then one
-//! more per reconnect), which FFmpeg reads as raw H.264 (`-f h264`).
+//! more per reconnect), which FFmpeg reads as raw H.264 (`-f h264`). An inset session's
+//! stream holds its packed pictures, base and inset side by side, as they were sent.
 
 use std::io::Write;
 use std::path::Path;
