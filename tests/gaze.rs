@@ -386,6 +386,10 @@ async fn an_h264_replay_saves_a_playable_stream() {
         !out.join("frames/000001.jpg").exists(),
         "no .jpg of H.264 bytes"
     );
+    let summary: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
+    assert_eq!(summary["asked"]["codec"], "h264", "{summary}");
+    assert_eq!(summary["server"]["codec"], "h264", "{summary}");
     let _ = std::fs::remove_dir_all(&out);
     shutdown.stop().await;
 }

@@ -266,6 +266,10 @@ pub fn replay(a: ReplayArgs) -> Result<()> {
         "start_s": a.start,
         "duration_s": a.duration,
         "loops": a.loops,
+        "codec": a.encoding.codec.name(),
+        "bitrate_kbps": a.encoding.bitrate_kbps,
+        "foveated_encoding": a.encoding.foveated_encoding,
+        "inset_deg": a.encoding.inset_deg,
     });
     summary["client_version"] = env!("CARGO_PKG_VERSION").into();
     std::fs::create_dir_all(&a.out).with_context(|| format!("creating {}", a.out.display()))?;
