@@ -52,6 +52,13 @@ fn a_drained_instance_hands_its_sessions_to_the_fleet_and_loses_nothing() {
         &std::fs::read_to_string(out.join("drain/load.json")).expect("drain/load.json"),
     )
     .unwrap();
+    // The file says how the frames were asked for (fleet.sh: the default, JPEG).
+    assert_eq!(load["encoding"]["codec"], "jpeg", "{load}");
+    assert_eq!(
+        load["encoding"]["inset_deg"],
+        serde_json::Value::Null,
+        "{load}"
+    );
     let run = &load["runs"][0];
     for zero in [
         "connection_failures",

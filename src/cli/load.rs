@@ -181,6 +181,13 @@ pub fn load(a: LoadArgs) -> Result<()> {
         "url": url,
         "scene": a.scene, "preset": a.preset, "width": a.size.0, "height": a.size.1, "rate_hz": a.rate_hz,
         "budget": { "p95_ms": a.budget_ms, "min_fps": a.min_fps },
+        "encoding": {
+            "codec": a.encoding.codec.name(),
+            "mix_codecs": a.mix_codecs.iter().map(|c| c.name()).collect::<Vec<_>>(),
+            "bitrate_kbps": a.encoding.bitrate_kbps,
+            "foveated_encoding": a.encoding.foveated_encoding,
+            "inset_deg": a.encoding.inset_deg,
+        },
         "capacity_sessions": capacity,
         "runs": reports,
     });
