@@ -6,17 +6,23 @@ use serde_json::Value;
 use crate::harness::{eval, gaze_at, screenshot, wait_for, Fixture, COLOURS};
 
 /// The mean absolute difference between the canvas and the inset image drawn alone, over the
-/// inset's unfeathered core (0 when the page put the inset where the header says).
+/// inset's unfeathered core (0 when the page put the inset where the header says). The inset
+/// is the second JPEG of the frame's bytes, or over H.264 the picture's inset part
+/// (`inset.packed.inset_x` onwards: not its base or its padding).
 const CORE_DIFFERENCE: &str = r#"(async () => {
   const h = window.fovea.lastHeader;
   const i = h.inset;
   const canvas = document.getElementById('view');
   const shown = canvas.getContext('2d').getImageData(0, 0, canvas.width, canvas.height).data;
-  const bytes = new Uint8Array(window.fovea.lastImage);
-  const inset = await createImageBitmap(new Blob([bytes.subarray(bytes.length - i.inset_bytes)], { type: 'image/jpeg' }));
   const c = new OffscreenCanvas(i.width, i.height);
   const ctx = c.getContext('2d');
-  ctx.drawImage(inset, 0, 0);
+  if (i.packed) {
+    ctx.drawImage(window.fovea.lastImage, i.packed.inset_x, 0, i.width, i.height, 0, 0, i.width, i.height);
+  } else {
+    const bytes = new Uint8Array(window.fovea.lastImage);
+    const inset = await createImageBitmap(new Blob([bytes.subarray(bytes.length - i.inset_bytes)], { type: 'image/jpeg' }));
+    ctx.drawImage(inset, 0, 0);
+  }
   const own = ctx.getImageData(0, 0, i.width, i.height).data;
   const m = Math.ceil(i.feather * i.width) + 1;
   let sum = 0, n = 0;
@@ -28,6 +34,21 @@ const CORE_DIFFERENCE: &str = r#"(async () => {
   }
   return n ? sum / n : -1;
 })()"#;
+
+/// The last frame's inset centre and gaze, in frame pixels.
+fn centre_and_gaze(h: &Value) -> ([f64; 2], [f64; 2]) {
+    let i = &h["inset"];
+    let num = |v: &Value| v.as_f64().unwrap();
+    let centre = [
+        num(&i["x"]) + num(&i["width"]) / 2.0,
+        num(&i["y"]) + num(&i["height"]) / 2.0,
+    ];
+    let gaze = [
+        num(&h["gaze"]["x"]) * num(&h["width"]),
+        num(&h["gaze"]["y"]) * num(&h["height"]),
+    ];
+    (centre, gaze)
+}
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn an_inset_frame_is_composed_where_the_gaze_was() {
@@ -50,21 +71,13 @@ async fn an_inset_frame_is_composed_where_the_gaze_was() {
     }
     let h = eval(&page, "window.fovea.lastHeader").await;
     let i = &h["inset"];
-    let (w, ht) = (h["width"].as_f64().unwrap(), h["height"].as_f64().unwrap());
-    let centre = [
-        i["x"].as_f64().unwrap() + i["width"].as_f64().unwrap() / 2.0,
-        i["y"].as_f64().unwrap() + i["height"].as_f64().unwrap() / 2.0,
-    ];
-    let gaze = [
-        h["gaze"]["x"].as_f64().unwrap() * w,
-        h["gaze"]["y"].as_f64().unwrap() * ht,
-    ];
+    let (centre, gaze) = centre_and_gaze(&h);
     assert!(
         (centre[0] - gaze[0]).abs() <= 2.0 && (centre[1] - gaze[1]).abs() <= 2.0,
         "inset centred on the gaze: {centre:?} vs {gaze:?}"
     );
     assert!(
-        i["base_width"].as_f64().unwrap() < w,
+        i["base_width"].as_f64().unwrap() < h["width"].as_f64().unwrap(),
         "the base is downscaled: {i}"
     );
     let diff = eval(&page, CORE_DIFFERENCE).await.as_f64().unwrap();
@@ -82,28 +95,6 @@ async fn an_inset_frame_is_composed_where_the_gaze_was() {
     drop(page);
     f.finish();
 }
-
-/// The same over H.264: both parts in one picture of the stream. The canvas's inset core must
-/// be the picture's inset part (`inset.packed.inset_x` onwards), not its base or its padding.
-const PACKED_CORE_DIFFERENCE: &str = r#"(() => {
-  const h = window.fovea.lastHeader;
-  const i = h.inset;
-  const canvas = document.getElementById('view');
-  const shown = canvas.getContext('2d').getImageData(0, 0, canvas.width, canvas.height).data;
-  const c = new OffscreenCanvas(i.width, i.height);
-  const ctx = c.getContext('2d');
-  ctx.drawImage(window.fovea.lastImage, i.packed.inset_x, 0, i.width, i.height, 0, 0, i.width, i.height);
-  const own = ctx.getImageData(0, 0, i.width, i.height).data;
-  const m = Math.ceil(i.feather * i.width) + 1;
-  let sum = 0, n = 0;
-  for (let y = m; y < i.height - m; y++) {
-    for (let x = m; x < i.width - m; x++) {
-      const a = ((y + i.y) * canvas.width + x + i.x) * 4, b = (y * i.width + x) * 4;
-      for (let k = 0; k < 3; k++) { sum += Math.abs(shown[a + k] - own[b + k]); n++; }
-    }
-  }
-  return n ? sum / n : -1;
-})()"#;
 
 /// The mean step between the canvas's last two columns, over the rows the inset leaves alone.
 const EDGE_STEP: &str = r#"(() => {
@@ -141,15 +132,7 @@ async fn an_h264_inset_frame_is_one_picture_composed_where_the_gaze_was() {
         wait_for(&page, &format!("window.fovea.framesShown > {shown}"), 20).await;
         let h = eval(&page, "window.fovea.lastHeader").await;
         let i = &h["inset"];
-        let (w, ht) = (h["width"].as_f64().unwrap(), h["height"].as_f64().unwrap());
-        let centre = [
-            i["x"].as_f64().unwrap() + i["width"].as_f64().unwrap() / 2.0,
-            i["y"].as_f64().unwrap() + i["height"].as_f64().unwrap() / 2.0,
-        ];
-        let gaze = [
-            h["gaze"]["x"].as_f64().unwrap() * w,
-            h["gaze"]["y"].as_f64().unwrap() * ht,
-        ];
+        let (centre, gaze) = centre_and_gaze(&h);
         // Placed on the 16-pixel grid near the gaze (a video inset stays put until the gaze
         // drifts 1° or a grid step from its centre: 13 px here).
         let (dx, dy) = ((centre[0] - gaze[0]).abs(), (centre[1] - gaze[1]).abs());
@@ -159,7 +142,7 @@ async fn an_h264_inset_frame_is_one_picture_composed_where_the_gaze_was() {
         );
         assert_eq!(i["x"].as_u64().unwrap() % 16, 0, "on the grid: {i}");
         assert_eq!(i["inset_bytes"], Value::from(0), "one picture: {i}");
-        let diff = eval(&page, PACKED_CORE_DIFFERENCE).await.as_f64().unwrap();
+        let diff = eval(&page, CORE_DIFFERENCE).await.as_f64().unwrap();
         assert!(
             (0.0..1.0).contains(&diff),
             "the canvas shows the picture's inset part in its core: mean difference {diff}"
