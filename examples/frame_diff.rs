@@ -1,7 +1,10 @@
 //! Compares two folders of PNG frames of the same names (see `scripts/compare_frames.sh`): per
 //! image "identical" or its max and mean FLIP; exits 1 when any differs by more than FLIP 0.001.
 //!
-//! cargo run --release --example frame_diff -- BEFORE_DIR AFTER_DIR
+//! cargo run --release --example frame_diff -- BEFORE_DIR AFTER_DIR [MAP_DIR]
+//!
+//! With MAP_DIR, each differing image's FLIP map is written there (grey, white = FLIP 1), to
+//! see where two renders differ and not only by how much.
 
 use std::path::Path;
 
@@ -21,9 +24,14 @@ fn load(path: &Path) -> Result<(Vec<u8>, u32, u32)> {
 
 fn main() -> Result<()> {
     let args: Vec<String> = std::env::args().skip(1).collect();
-    let [before, after] = args.as_slice() else {
-        bail!("usage: frame_diff BEFORE_DIR AFTER_DIR");
+    let (before, after, maps) = match args.as_slice() {
+        [b, a] => (b, a, None),
+        [b, a, m] => (b, a, Some(Path::new(m))),
+        _ => bail!("usage: frame_diff BEFORE_DIR AFTER_DIR [MAP_DIR]"),
     };
+    if let Some(dir) = maps {
+        std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
+    }
     let mut names: Vec<_> = std::fs::read_dir(before)?
         .filter_map(|e| e.ok())
         .map(|e| e.file_name())
@@ -55,6 +63,14 @@ fn main() -> Result<()> {
             distance_cm: 60.0,
         };
         let map = flip_map(&a, &b, w, h, pixels_per_degree(&viewing));
+        if let Some(dir) = maps {
+            let grey: Vec<u8> = map.iter().map(|e| (e * 255.0).round() as u8).collect();
+            let path = dir.join(name);
+            image::GrayImage::from_raw(w, h, grey)
+                .context("FLIP map size")?
+                .save(&path)
+                .with_context(|| format!("writing {}", path.display()))?;
+        }
         let max = map.iter().copied().fold(0.0, f64::max);
         let mean = map.iter().sum::<f64>() / map.len() as f64;
         let differing = a.chunks(4).zip(b.chunks(4)).filter(|(p, q)| p != q).count();
