@@ -1,5 +1,6 @@
 //! Radiosity in the frame (GPU, software adapter): the cornell box's walls light each other and
-//! the translucent bunny, the solve is shared by every renderer, and open scenes never run it.
+//! the translucent bunny, the solve is shared by every renderer, open scenes never run it unless
+//! their file asks, and then a sunlit floor lights the object standing on it.
 
 use std::time::Duration;
 
@@ -114,4 +115,61 @@ fn renderers_share_one_solve_and_open_scenes_have_none() {
     let mut req = FrameRequest::new("bunny-marble", 32, 24);
     req.settings = fovea::settings::RenderSettings::of(fovea::settings::Preset::Fast);
     assert!(a.render(&req).unwrap().radiosity.is_none());
+}
+
+#[test]
+fn a_sunlit_floor_lights_the_bunny_on_it_when_the_scene_asks_for_radiosity() {
+    // No emitter and no ambient: with radiosity on, the key light's first bounce is the only
+    // light the bunny's shaded side gets.
+    let scene = fovea::scene::Scene::from_json(
+        &serde_json::json!({
+            "name": "sunlit-floor", "ambient": 0.0, "background_srgb": [0, 0, 0],
+            "light": {"to_light": [-0.5, 0.7, 0.6], "color": [1, 1, 1], "intensity": 1},
+            "camera": {"eye": [0, 9, 22], "target": [0, 3, 0], "fov_y_deg": 35, "near": 1, "far": 200},
+            "radiosity": {"mode": "on", "patch_size": 2.5},
+            "materials": {
+                "white": {"kind": "opaque", "albedo": [0.8, 0.8, 0.8], "roughness": 0.9},
+                "plaster": {"kind": "opaque", "albedo": [0.7, 0.7, 0.7], "roughness": 0.9}
+            },
+            "objects": [
+                {"mesh": "bunny.ply", "material": "white", "scale": 0.7},
+                {"mesh": "quad", "material": "plaster",
+                 "corners": [[-20, 0, -20], [-20, 0, 20], [20, 0, 20], [20, 0, -20]]}
+            ]
+        })
+        .to_string(),
+    )
+    .unwrap();
+    let mut r = renderer();
+    r.add_scene(scene).unwrap();
+    let solve = r
+        .radiosity("sunlit-floor")
+        .unwrap()
+        .expect("mode on runs it");
+    let snap = solve.wait(Duration::from_secs(600)).expect("a snapshot");
+    assert!(snap.converged, "{:?}", snap.stats);
+    let shot = |r: &mut Renderer, indirect: bool, stream: u64| {
+        let mut req = FrameRequest::new("sunlit-floor", W, H);
+        req.settings = fovea::settings::RenderSettings::of(fovea::settings::Preset::Full);
+        req.settings.indirect = indirect;
+        req.stream = stream;
+        req.marker = false;
+        r.render(&req).unwrap();
+        r.inspect(stream, "sunlit-floor", W, H).unwrap()
+    };
+    let (lit, dark) = (shot(&mut r, true, 1), shot(&mut r, false, 2));
+    // The bunny's sides facing away from the light and down see the floor, never the sun.
+    let l = glam::Vec3::new(-0.5, 0.7, 0.6).normalize();
+    let away = |n: [f32; 3]| bunny(n) && glam::Vec3::from(n).dot(l) < -0.1 && n[1] < 0.0;
+    let (b_lit, b_dark) = (mean(&lit, away, 0..W)[1], mean(&dark, away, 0..W)[1]);
+    assert!(
+        b_dark < 1e-3 && b_lit > 0.05,
+        "the bunny's unlit side: {b_dark} direct only, {b_lit} with the floor's bounce"
+    );
+    // The floor mostly sees the sky: its light barely changes.
+    let (f_lit, f_dark) = (mean(&lit, floor, 0..W)[1], mean(&dark, floor, 0..W)[1]);
+    assert!(
+        f_lit >= f_dark && f_lit < 1.08 * f_dark,
+        "floor {f_lit} with radiosity, {f_dark} without"
+    );
 }

@@ -61,6 +61,7 @@ pub fn radiosity(a: RadiosityArgs) -> Result<()> {
     let options = Options {
         stop_fraction: scene.file.radiosity.map_or(0.001, |r| r.stop_fraction),
         threads: a.threads,
+        sun: fovea::scene::plan::radiosity_sun(&scene),
         visibility: match a.cube {
             0 => fovea::radiosity::Visibility::Rays,
             resolution => fovea::radiosity::Visibility::Cube { resolution },

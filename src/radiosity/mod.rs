@@ -86,6 +86,18 @@ pub struct Options {
     /// Worker threads for the receivers of one shot (0: all cores).
     pub threads: usize,
     pub visibility: Visibility,
+    /// The scene's directional key light, whose first bounce the solve carries: every element
+    /// it reaches starts with ρ·E·cos θ unshot (no emitter needed).
+    pub sun: Option<Sun>,
+}
+
+/// A directional light for radiosity's first bounce: direction towards it (unit) and the
+/// irradiance it gives a surface facing it. Its direct light is not in the solve's output (the
+/// frame shades it with its shadow map); what it bounces is.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Sun {
+    pub to_light: Vec3,
+    pub irradiance: Vec3,
 }
 
 /// How a shot finds which receivers see the shooter.
@@ -107,6 +119,7 @@ impl Default for Options {
             max_shots: 20_000,
             threads: 0,
             visibility: Visibility::Rays,
+            sun: None,
         }
     }
 }
@@ -121,7 +134,7 @@ pub enum RadiosityError {
     BadValue(usize),
     #[error("surface {0}: mesh arrays disagree (indices past the vertices or normals missing)")]
     BadMesh(usize),
-    #[error("nothing emits light: radiosity needs at least one emitting surface")]
+    #[error("nothing emits light: radiosity needs an emitting surface or a key light that reaches a surface")]
     NoEmitter,
 }
 

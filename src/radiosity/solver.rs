@@ -203,6 +203,9 @@ impl Solver {
             }
             solver.outputs += s.output_len();
         }
+        if let Some(sun) = solver.options.sun {
+            solver.seed_sun(sun);
+        }
         if solver.emitted <= 0.0 {
             return Err(RadiosityError::NoEmitter);
         }

@@ -12,6 +12,7 @@ pub(super) fn start_radiosity(scene: &Scene) -> Option<crate::radiosity::Radiosi
     }
     let options = crate::radiosity::Options {
         stop_fraction: scene.file.radiosity.map_or(0.001, |r| r.stop_fraction),
+        sun: crate::scene::plan::radiosity_sun(scene),
         ..Default::default()
     };
     match crate::radiosity::RadiosityHandle::start(

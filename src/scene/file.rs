@@ -217,6 +217,8 @@ pub enum RadiosityMode {
     /// The plan decides: on for an enclosed scene with an area light (see `Plan`).
     #[default]
     Auto,
+    /// Whenever something emits or the key light shines (and holds still): the key light's
+    /// first bounce seeds the solve, so an open scene gets its floor's light on its objects.
     On,
     Off,
 }

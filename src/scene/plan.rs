@@ -110,12 +110,29 @@ pub const SHADOW_TILES: usize = 16;
 /// meets a surface: a box open on one side (a Cornell box) is ~5/6, a bunny on a floor ~1/2.
 pub const ENCLOSED: f64 = 2.0 / 3.0;
 
+/// The key light as radiosity's source of a first bounce, when it shines and holds still (an
+/// orbiting light would need a new solve every frame).
+pub fn radiosity_sun(scene: &Scene) -> Option<crate::radiosity::Sun> {
+    let l = &scene.file.light;
+    let shines = l.intensity > 0.0 && l.color.iter().any(|&c| c > 0.0);
+    (shines && l.orbit_deg_per_s == 0.0).then(|| crate::radiosity::Sun {
+        to_light: Vec3::from(l.to_light),
+        irradiance: Vec3::from(l.color) * l.intensity,
+    })
+}
+
 /// Whether the scene needs radiosity, and why.
 fn radiosity(scene: &Scene) -> (bool, String) {
     use super::RadiosityMode;
     let mode = scene.file.radiosity.map(|r| r.mode).unwrap_or_default();
+    let sun = radiosity_sun(scene).is_some();
     match mode {
         RadiosityMode::Off => return (false, "off (the scene file turns it off)".into()),
+        RadiosityMode::On if sun => return (
+            true,
+            "on (the scene file asks for it): the key light's first bounce and its interreflection"
+                .into(),
+        ),
         _ if !scene.has_emitter() => {
             return (
                 false,
@@ -337,6 +354,35 @@ mod tests {
         let open = Scene::from_json(&serde_json::to_string(&file).unwrap()).unwrap();
         let p = Plan::of(&open, 640, 480);
         assert!(!p.radiosity && p.to_string().contains("open scene"), "{p}");
+    }
+
+    #[test]
+    fn radiosity_on_carries_a_still_key_light_s_bounce_with_no_emitter() {
+        let marble = include_str!("../../assets/scenes/bunny-marble.json");
+        let mut file: crate::scene::SceneFile = serde_json::from_str(marble).unwrap();
+        file.radiosity = Some(crate::scene::RadiositySpec {
+            mode: crate::scene::RadiosityMode::On,
+            patch_size: 2.0,
+            max_depth: 2,
+            stop_fraction: 0.001,
+        });
+        let plan_of = |file: &crate::scene::SceneFile| {
+            let scene = Scene::from_json(&serde_json::to_string(file).unwrap()).unwrap();
+            (Plan::of(&scene, 640, 480), radiosity_sun(&scene))
+        };
+        let (p, sun) = plan_of(&file);
+        assert!(p.radiosity && p.to_string().contains("first bounce"), "{p}");
+        let sun = sun.unwrap();
+        assert!(
+            (sun.irradiance.x - 2.5).abs() < 1e-6 && (sun.to_light.length() - 1.0).abs() < 1e-6
+        );
+        // An orbiting or dark key light gives no bounce, and with no emitter nothing runs.
+        file.light.orbit_deg_per_s = 10.0;
+        let (p, sun) = plan_of(&file);
+        assert!(!p.radiosity && sun.is_none(), "{p}");
+        file.light.orbit_deg_per_s = 0.0;
+        file.light.intensity = 0.0;
+        assert!(!plan_of(&file).0.radiosity);
     }
 
     #[test]

@@ -85,6 +85,36 @@ impl Solver {
         Ok(())
     }
 
+    /// The key light's first bounce as unshot radiosity: each element it reaches (its centre
+    /// facing the light, a shadow ray to it unblocked) reflects ρ·E·cos θ. The light itself
+    /// counts as emitted power, so convergence is judged against what it brought in.
+    pub(super) fn seed_sun(&mut self, sun: super::super::Sun) {
+        let l = sun.to_light.normalize_or_zero();
+        // Four times the scene's size (the margin is 1e-4 of it): the ray leaves its bounds.
+        let reach = 4.0 * self.margin * 1e4;
+        let mut seeded = Vec::new();
+        for (i, e) in self.elements.iter().enumerate() {
+            let centre = &self.vertices[e.centre as usize];
+            let cos = centre.normal.dot(l);
+            if !(cos > 0.0) || e.reflectance == Vec3::ZERO {
+                continue;
+            }
+            if self
+                .bvh
+                .occluded(centre.origin, centre.origin + l * reach, self.margin)
+            {
+                continue;
+            }
+            seeded.push((i, e.reflectance * sun.irradiance * cos));
+        }
+        for (i, b) in seeded {
+            let e = &mut self.elements[i];
+            e.radiosity += b;
+            e.unshot += b;
+            self.emitted += luminance(b) * f64::from(e.area);
+        }
+    }
+
     pub(super) fn add_mesh(
         &mut self,
         index: usize,
