@@ -192,11 +192,15 @@ fn shade(p: vec2<i32>) {
             // part what crosses the interface (so metals are not black where no light hits).
             let e_o = lobe_albedo(m, f0, dot(n, v));
             let ambient = frame.light * sky * (diffuse * (1.0 - e_o) + e_o);
+            // Radiosity's irradiance is treated like the sky: the lobe reflects E(μ_o) of it (a
+            // glossy object shows the lit floor under it), the diffuse part what crosses.
             rgb = key * surface_light(m, f0, diffuse, n, v, l) + extra_lights(m, f0, diffuse, n, v, x)
-                + diffuse * gi + ambient;
+                + gi * (diffuse * (1.0 - e_o) + e_o) + ambient;
         } else {
             let f0 = vec3<f32>(m.surface.z);
-            let ambient = (m.albedo.rgb + lobe_albedo(m, f0, dot(n, v))) * frame.light * sky;
+            let e_o = lobe_albedo(m, f0, dot(n, v));
+            // The lobe reflects the sky and radiosity's irradiance alike (see the opaque case).
+            let ambient = (m.albedo.rgb + e_o) * frame.light * sky + e_o * gi;
             let t_out = transmitted(m, dot(n, v));
             // The interface's reflection of every light, and the extra lights' diffuse part.
             let surface = key * max(cos_i, 0.0) * specular_lobe(m, f0, n, v, l)
