@@ -20,8 +20,11 @@ How the scene is matched (docs/bench/ground-truth.md says more):
 * translucent materials: a rough dielectric boundary (GGX, α = roughness², η) around a homogeneous medium with
   σt = σ's + σa and single-scattering albedo σ's/σt per channel, isotropic phase function
   (Jensen's reduced coefficients), scaled from mm⁻¹ to scene units by mm_per_unit;
-* opaque materials: Disney's principled BSDF (base colour, roughness, metallic, specular from the
-  IOR), the same family as Fovea's Lambert + GGX; emitters: area lights;
+* opaque materials: Fovea's own surface model (`--surfaces fovea`, the default:
+  tools/mitsuba_fovea_surface.py, Lambert scaled by what the GGX lobe leaves + GGX), so the
+  comparison measures light transport (shadows, interreflection, subsurface) and not a choice of
+  BRDF; or Disney's principled BSDF (`--surfaces principled`: base colour, roughness, metallic,
+  specular from the IOR), which adds retro-reflection; emitters: area lights;
 * background: pixels the camera ray leaves the scene through get Fovea's background colour.
 """
 import argparse
@@ -74,7 +77,7 @@ def quad_transform(mi, corners):
     return mi.ScalarTransform4f(m.tolist())
 
 
-def material_dict(spec, mm_per_unit, diffuse_only):
+def material_dict(spec, mm_per_unit, diffuse_only, surfaces):
     kind = spec["kind"]
     # Fovea's surfaces (docs/scenes.md): GGX with α = roughness², clamped like Fovea's
     # optics::specular::MIN_ALPHA. Opaque: a rough dielectric coating over a diffuse base
@@ -84,12 +87,17 @@ def material_dict(spec, mm_per_unit, diffuse_only):
     if kind == "opaque":
         if diffuse_only:
             return {"bsdf": {"type": "diffuse", "reflectance": {"type": "rgb", "value": spec["albedo"]}}}
-        # Disney's principled BSDF is the same family as Fovea's (UE4's) surface: a diffuse base
-        # that keeps its albedo plus a GGX lobe with F0 = 0.08 × specular (0.04 at 0.5, η 1.5),
-        # metals taking their colour from the base. (roughplastic, a physically coated layer,
-        # returns ~half the diffuse light: a different model of "plastic".)
+        # Disney's principled BSDF (with --surfaces principled) is the same family as Fovea's
+        # (UE4's) surface: a diffuse base plus a GGX lobe with F0 = 0.08 × specular (0.04 at
+        # 0.5, η 1.5), metals taking their colour from the base; its diffuse part adds
+        # retro-reflection and keeps the lobe's share (+24% on a rough floor). (roughplastic, a
+        # physically coated layer, compresses the diffuse light by 1/η²: another model again.)
         ior = spec.get("ior", 1.5)
         f0 = ((ior - 1) / (ior + 1)) ** 2
+        if surfaces == "fovea":
+            r, g, b = spec["albedo"]
+            return {"bsdf": {"type": "fovea_surface", "r": r, "g": g, "b": b, "alpha": alpha,
+                             "f0": f0, "metallic": spec.get("metallic", 0.0)}}
         return {"bsdf": {"type": "principled", "base_color": {"type": "rgb", "value": spec["albedo"]},
                          "roughness": spec.get("roughness", 0.5), "metallic": spec.get("metallic", 0.0),
                          "specular": f0 / 0.08}}
@@ -125,12 +133,21 @@ def main():
     p.add_argument("--diffuse-only", action="store_true", help="path tracer, no media (radiosity checks)")
     p.add_argument("--drop-material", action="append", default=[], help="leave out objects of this material")
     p.add_argument("--passes", type=int, default=1, help="split the samples into passes (progress, memory)")
+    p.add_argument("--surfaces", choices=["fovea", "principled"], default="fovea",
+                   help="opaque surface model: Fovea's own (Lambert + GGX, tools/mitsuba_fovea_surface.py) "
+                        "so that only light transport differs, or Disney's principled")
     p.add_argument("--sun-half-angle-deg", type=float, default=10.0,
-                   help="angular radius of the disc standing in for the directional light")
+                   help="angular radius of the disc standing in for the directional light; 0: a "
+                        "directional emitter as Fovea's (needs rough, not smooth, translucent boundaries)")
     a = p.parse_args()
 
     import mitsuba as mi
     mi.set_variant(a.variant)
+    if a.surfaces == "fovea":
+        import sys
+        sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+        from mitsuba_fovea_surface import register
+        register()
     scene_dir = os.path.dirname(os.path.abspath(a.scene))
     # Built-in meshes (bunny.ply) live in the repository's assets/meshes, wherever the scene is.
     mesh_dir = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "assets", "meshes")
@@ -156,7 +173,13 @@ def main():
             "sampler": {"type": "independent", "sample_count": max(1, a.spp // a.passes)},
         },
     }
-    if light["intensity"] > 0:
+    if light["intensity"] > 0 and a.sun_half_angle_deg == 0:
+        # Fovea's own light: a directional emitter. Through a rough dielectric boundary the
+        # path tracer reaches it by next-event estimation at the boundary (its lobe is not a
+        # delta), and no sampled direction can hit it, so no fireflies from hitting a disc.
+        d["sun"] = {"type": "directional", "direction": (-to_light).tolist(),
+                    "irradiance": {"type": "rgb", "value": e_light}}
+    elif light["intensity"] > 0:
         # A delta light cannot be reached through a smooth dielectric (next-event estimation
         # stops at the specular boundary), so the sun is a distant disc of small angular radius
         # α with radiance E / (π sin²α): the same irradiance, seen through the boundary.
@@ -176,7 +199,7 @@ def main():
     for i, o in enumerate(s["objects"]):
         if o["material"] in a.drop_material:
             continue
-        m = material_dict(s["materials"][o["material"]], mm, a.diffuse_only)
+        m = material_dict(s["materials"][o["material"]], mm, a.diffuse_only, a.surfaces)
         if o["mesh"] == "quad":
             shape = {"type": "rectangle", "to_world": quad_transform(mi, o["corners"])}
         elif o["mesh"] == "plane":
@@ -214,7 +237,7 @@ def main():
     Image.fromarray(np.round(srgb_encode(out) * 255).astype(np.uint8)).save(png)
     with open(os.path.splitext(a.out)[0] + ".json", "w") as f:
         json.dump({"scene": a.scene, "width": a.width, "height": a.height, "spp": a.spp,
-                   "variant": a.variant, "max_depth": a.max_depth, "diffuse_only": a.diffuse_only,
+                   "variant": a.variant, "surfaces": a.surfaces, "max_depth": a.max_depth, "diffuse_only": a.diffuse_only,
                    "dropped": a.drop_material}, f, indent=2)
     print(f"wrote {a.out} and {png}")
 
