@@ -136,6 +136,8 @@ def main():
     p.add_argument("--surfaces", choices=["fovea", "principled"], default="fovea",
                    help="opaque surface model: Fovea's own (Lambert + GGX, tools/mitsuba_fovea_surface.py) "
                         "so that only light transport differs, or Disney's principled")
+    p.add_argument("--split", action="store_true",
+                   help="also write OUT-a.png and OUT-b.png from the even and the odd passes (the noise floor)")
     p.add_argument("--sun-half-angle-deg", type=float, default=10.0,
                    help="angular radius of the disc standing in for the directional light; 0: a "
                         "directional emitter as Fovea's (needs rough, not smooth, translucent boundaries)")
@@ -210,12 +212,12 @@ def main():
         shape.update(m)
         d[f"object{i}"] = shape
     scene = mi.load_dict(d)
-    acc = None
+    halves = [None, None]
     for k in range(a.passes):
         img = np.array(mi.render(scene, seed=k), dtype=np.float64)
-        acc = img if acc is None else acc + img
+        halves[k % 2] = img if halves[k % 2] is None else halves[k % 2] + img
         print(f"pass {k + 1}/{a.passes}", flush=True)
-    img = acc / a.passes
+    img = sum(h for h in halves if h is not None) / a.passes
     rgb = img[..., :3]
     # Coverage: pixels whose camera rays hit a surface (depth AOV > 0; edge pixels count as hit).
     d["integrator"] = {"type": "aov", "aovs": "dd:depth"}
@@ -228,13 +230,25 @@ def main():
     depth = np.array(mi.render(mi.load_dict(d)), dtype=np.float64)
     alpha = (depth[..., -1:] > 0).astype(float)
     bg = np.array([srgb_decode(c) for c in s["background_srgb"]])
-    # Fovea's units are radiance × π; where rays leave the scene, Fovea's background shows.
-    out = rgb * math.pi - (1 - alpha) * np.array(env) * math.pi + (1 - alpha) * bg
+
+    def display(rgb):
+        # Fovea's units are radiance × π; where rays leave the scene, Fovea's background shows.
+        return rgb * math.pi - (1 - alpha) * np.array(env) * math.pi + (1 - alpha) * bg
+
+    out = display(rgb)
     os.makedirs(os.path.dirname(os.path.abspath(a.out)), exist_ok=True)
     mi.Bitmap(out.astype(np.float32), pixel_format=mi.Bitmap.PixelFormat.RGB).write(a.out)
     png = os.path.splitext(a.out)[0] + ".png"
     from PIL import Image
     Image.fromarray(np.round(srgb_encode(out) * 255).astype(np.uint8)).save(png)
+    if a.split and a.passes >= 2:
+        # The even and the odd passes alone: two independent renders at half the samples,
+        # whose difference is the reference's own noise (its FLIP is the floor a perfect
+        # renderer would score against one of them).
+        for name, h, n in (("a", halves[0], (a.passes + 1) // 2), ("b", halves[1], a.passes // 2)):
+            half = display(h[..., :3] / n)
+            Image.fromarray(np.round(srgb_encode(half) * 255).astype(np.uint8)).save(
+                os.path.splitext(a.out)[0] + f"-{name}.png")
     with open(os.path.splitext(a.out)[0] + ".json", "w") as f:
         json.dump({"scene": a.scene, "width": a.width, "height": a.height, "spp": a.spp,
                    "variant": a.variant, "surfaces": a.surfaces, "max_depth": a.max_depth, "diffuse_only": a.diffuse_only,
