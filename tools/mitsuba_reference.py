@@ -251,7 +251,8 @@ def main():
                 os.path.splitext(a.out)[0] + f"-{name}.png")
     with open(os.path.splitext(a.out)[0] + ".json", "w") as f:
         json.dump({"scene": a.scene, "width": a.width, "height": a.height, "spp": a.spp,
-                   "variant": a.variant, "surfaces": a.surfaces, "max_depth": a.max_depth, "diffuse_only": a.diffuse_only,
+                   "variant": a.variant, "surfaces": a.surfaces, "sun_half_angle_deg": a.sun_half_angle_deg,
+                   "passes": a.passes, "max_depth": a.max_depth, "diffuse_only": a.diffuse_only,
                    "dropped": a.drop_material}, f, indent=2)
     print(f"wrote {a.out} and {png}")
 
