@@ -133,10 +133,17 @@ fn radiosity(scene: &Scene) -> (bool, String) {
             "on (the scene file asks for it): the key light's first bounce and its interreflection"
                 .into(),
         ),
-        _ if !scene.has_emitter() => {
+        RadiosityMode::On if !scene.has_emitter() => {
             return (
                 false,
-                "off (nothing emits: the scene is lit by its directional light alone)".into(),
+                "off (nothing emits, and the key light is dark or orbits: no bounce to solve)"
+                    .into(),
+            )
+        }
+        RadiosityMode::Auto if !scene.has_emitter() => {
+            return (
+                false,
+                "off (nothing emits; \"radiosity\": {\"mode\": \"on\"} in a scene file carries the key light's bounce)".into(),
             )
         }
         RadiosityMode::On => return (true, "on (the scene file asks for it)".into()),
