@@ -90,7 +90,8 @@ fn the_codec_sweep_measures_every_configuration_on_the_same_frames() {
             "JPEG + inset 20°",
             "H.264 + inset 20°",
             "JPEG + inset 16°",
-            "H.264 + inset 16°"
+            "H.264 + inset 16°",
+            "JPEG + inset 13.3°"
         ]
     );
     let jpeg = &report.equal_quality[0];

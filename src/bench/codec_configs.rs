@@ -48,7 +48,9 @@ impl CodecConfig {
     /// The foveated encoding, if any, as the family names it.
     fn foveated(&self) -> Option<String> {
         match (self.low_pass, self.inset_deg) {
-            (_, Some(deg)) => Some(format!("inset {deg}°")),
+            // 20° and 16° print whole; the derived 13.3° to a tenth.
+            (_, Some(deg)) if deg.fract().abs() < 1e-9 => Some(format!("inset {deg:.0}°")),
+            (_, Some(deg)) => Some(format!("inset {deg:.1}°")),
             (true, None) => Some("low-pass".into()),
             (false, None) => None,
         }
@@ -56,7 +58,7 @@ impl CodecConfig {
 }
 
 /// JPEG q50–95 and H.264 at 500–8000 kbit/s, each plain and low-passed, and both with a 20°
-/// and a 16° inset: the encoder comparison issue 16 asks for.
+/// and a 16° inset, and JPEG with a 13.3° one: the encoder comparison issue 16 asks for.
 pub fn codec_configs() -> Vec<CodecConfig> {
     let mut out = Vec::new();
     let jpeg = |q: u8, low_pass: bool, inset_deg: Option<f64>| CodecConfig {
@@ -94,6 +96,12 @@ pub fn codec_configs() -> Vec<CodecConfig> {
             });
         }
     }
+    // A still image's inset is placed on the gaze every frame, with no hold to allow for:
+    // its narrowest is 13.3° (`inset::narrowest_deg`). JPEG only (a video inset is held).
+    let still = crate::encode::inset::narrowest_deg(LowPass::default().guard_deg);
+    for q in [50u8, 75, 85, 95] {
+        out.push(jpeg(q, false, Some(still)));
+    }
     for c in &mut out {
         let knob = match c.h264_kbps {
             Some(k) => format!("{k} kbit/s"),
@@ -127,5 +135,11 @@ mod tests {
         }
         assert_eq!(names.iter().filter(|n| n.contains("inset 20°")).count(), 9);
         assert_eq!(names.iter().filter(|n| n.contains("inset 16°")).count(), 9);
+        // The still inset's derived width, JPEG only.
+        assert!(names.contains(&"JPEG q85 + inset 13.3°"), "{names:?}");
+        assert_eq!(
+            names.iter().filter(|n| n.contains("inset 13.3°")).count(),
+            4
+        );
     }
 }

@@ -40,6 +40,13 @@ impl InsetPlan {
     }
 }
 
+/// The narrowest inset, degrees, whose unfeathered core holds everything within `guard_deg`
+/// of the gaze when the inset is centred on it (a still image's inset, placed on the gaze
+/// every frame): 2·guard/(1 − 2·FEATHER). For the 5° judged fovea, 13.3°.
+pub fn narrowest_deg(guard_deg: f64) -> f64 {
+    2.0 * guard_deg / (1.0 - 2.0 * FEATHER)
+}
+
 /// The inset for a frame of `width`×`height` seen as `viewing`, `gaze` normalised: a square
 /// `inset_deg` wide (at most the frame) centred on the gaze, moved inside the frame.
 pub fn plan(

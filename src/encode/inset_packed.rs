@@ -42,7 +42,7 @@ pub const HOLD_DEG: f64 = 1.0;
 /// of the gaze wherever [`follow`] puts it (up to [`HOLD_DEG`] off): 2·(guard + hold)/(1 − 2·
 /// FEATHER). For the low-pass's 5° guard, 16°.
 pub fn narrowest_deg(guard_deg: f64) -> f64 {
-    2.0 * (guard_deg + HOLD_DEG) / (1.0 - 2.0 * inset::FEATHER)
+    inset::narrowest_deg(guard_deg + HOLD_DEG)
 }
 
 /// Where a video frame's inset goes, given the one the stream's previous picture held: that one
@@ -255,6 +255,11 @@ mod tests {
         let d = narrowest_deg(LowPass::default().guard_deg);
         assert!((d - 16.0).abs() < 1e-12, "{d}");
         assert!(((0.5 - crate::encode::inset::FEATHER) * d - 6.0).abs() < 1e-12);
+        // A still inset, centred on the gaze every frame, needs no room for the hold: 13.3°,
+        // its core exactly the 5° guard wide.
+        let still = crate::encode::inset::narrowest_deg(LowPass::default().guard_deg);
+        assert!(((0.5 - crate::encode::inset::FEATHER) * still - 5.0).abs() < 1e-12);
+        assert!(still < d);
         // The base's scale allows for the offsets: never coarser than a centred inset's.
         assert!(first.scale <= plan(w, h, [0.5, 0.5], &v, 20.0, &a).scale);
     }
