@@ -205,6 +205,10 @@ fn shade(p: vec2<i32>) {
             // The interface's reflection of every light, and the extra lights' diffuse part.
             let surface = key * max(cos_i, 0.0) * specular_lobe(m, f0, n, v, l)
                 + extra_lights(m, f0, m.albedo.rgb, n, v, x);
+            // The photons carry radiosity's irradiance where they enter: on the side facing the
+            // key light. The other side's (a floor's bounce onto an object's underside) enters
+            // locally, through the dipole's total diffuse reflectance, as on the opaque rung.
+            let unseen_gi = m.albedo.rgb * gi * select(0.0, 1.0, cos_i <= 0.0);
             var body: vec3<f32>;
             if (rung == RUNG_OPAQUE) {
                 body = m.albedo.rgb * (key * max(cos_i, 0.0) * transmitted(m, cos_i) + gi) * t_out;
@@ -216,9 +220,9 @@ fn shade(p: vec2<i32>) {
             } else if (rung == RUNG_SCREEN) {
                 body = m.albedo.rgb * (diffused[index_of(p)].rgb + gi) * t_out;
             } else if (rung == RUNG_BRUTE_FORCE) {
-                body = gather_all(x, m) * t_out;
+                body = (gather_all(x, m) + unseen_gi) * t_out;
             } else {
-                body = gather_cut(x, m) * t_out;
+                body = (gather_cut(x, m) + unseen_gi) * t_out;
             }
             rgb = body + ambient + surface;
         }

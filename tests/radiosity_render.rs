@@ -173,3 +173,71 @@ fn a_sunlit_floor_lights_the_bunny_on_it_when_the_scene_asks_for_radiosity() {
         "floor {f_lit} with radiosity, {f_dark} without"
     );
 }
+
+#[test]
+fn the_floors_bounce_reaches_a_translucent_bodys_far_side_on_every_rung() {
+    // The photons carry radiosity's irradiance only where they enter, on the side facing the
+    // key light; the side facing away gets the floor's bounce locally. On every rung the
+    // bounce adds about what it adds on the opaque one (albedo × irradiance through the
+    // interface), not only the interface's reflection of it.
+    let scene = fovea::scene::Scene::from_json(
+        &serde_json::json!({
+            "name": "sunlit-marble", "ambient": 0.0, "background_srgb": [0, 0, 0],
+            "mm_per_unit": 10.0,
+            "light": {"to_light": [-0.5, 0.7, 0.6], "color": [1, 1, 1], "intensity": 1},
+            "camera": {"eye": [0, 9, 22], "target": [0, 3, 0], "fov_y_deg": 35, "near": 1, "far": 200},
+            "radiosity": {"mode": "on", "patch_size": 2.5},
+            "materials": {
+                "marble": {"kind": "translucent", "preset": "marble", "roughness": 0.3},
+                "plaster": {"kind": "opaque", "albedo": [0.7, 0.7, 0.7], "roughness": 0.9}
+            },
+            "objects": [
+                {"mesh": "bunny.ply", "material": "marble", "scale": 0.7},
+                {"mesh": "quad", "material": "plaster",
+                 "corners": [[-20, 0, -20], [-20, 0, 20], [20, 0, 20], [20, 0, -20]]}
+            ]
+        })
+        .to_string(),
+    )
+    .unwrap();
+    let mut r = renderer();
+    r.add_scene(scene).unwrap();
+    let solve = r
+        .radiosity("sunlit-marble")
+        .unwrap()
+        .expect("mode on runs it");
+    assert!(
+        solve
+            .wait(Duration::from_secs(600))
+            .expect("a snapshot")
+            .converged
+    );
+    let mut stream = 0;
+    let mut shot = |r: &mut Renderer, rung: fovea::settings::Rung, indirect: bool| {
+        let mut req = FrameRequest::new("sunlit-marble", W, H);
+        req.settings = fovea::settings::RenderSettings::of(fovea::settings::Preset::Full);
+        req.settings.translucency.rung = rung;
+        req.settings.indirect = indirect;
+        stream += 1;
+        req.stream = stream;
+        req.marker = false;
+        r.render(&req).unwrap();
+        r.inspect(stream, "sunlit-marble", W, H).unwrap()
+    };
+    let l = glam::Vec3::new(-0.5, 0.7, 0.6).normalize();
+    let away = |n: [f32; 3]| bunny(n) && glam::Vec3::from(n).dot(l) < -0.1 && n[1] < 0.0;
+    let mut gain = |r: &mut Renderer, rung| {
+        let (lit, dark) = (shot(r, rung, true), shot(r, rung, false));
+        mean(&lit, away, 0..W)[1] - mean(&dark, away, 0..W)[1]
+    };
+    use fovea::settings::Rung;
+    let opaque = gain(&mut r, Rung::Opaque);
+    assert!(opaque > 0.03, "the bounce on the opaque rung: {opaque}");
+    for rung in [Rung::Hierarchical, Rung::BruteForce] {
+        let g = gain(&mut r, rung);
+        assert!(
+            g > 0.8 * opaque && g < 1.5 * opaque,
+            "{rung:?}: the bounce adds {g}, on the opaque rung {opaque}"
+        );
+    }
+}

@@ -130,6 +130,8 @@ def main():
     p.add_argument("--spp", type=int, default=1024, help="samples per pixel")
     p.add_argument("--variant", default="scalar_rgb", help="scalar_rgb, llvm_ad_rgb (libllvm19), cuda_ad_rgb")
     p.add_argument("--max-depth", type=int, default=4096, help="path length bound (SSS needs thousands)")
+    p.add_argument("--integrator", choices=["volpath", "volpathmis"], default="volpath",
+                   help="volpathmis: spectral MIS, far less colour noise in chromatic media")
     p.add_argument("--diffuse-only", action="store_true", help="path tracer, no media (radiosity checks)")
     p.add_argument("--drop-material", action="append", default=[], help="leave out objects of this material")
     p.add_argument("--passes", type=int, default=1, help="split the samples into passes (progress, memory)")
@@ -163,7 +165,7 @@ def main():
     cam = s["camera"]
     d = {
         "type": "scene",
-        "integrator": {"type": "path" if a.diffuse_only else "volpath", "max_depth": a.max_depth,
+        "integrator": {"type": "path" if a.diffuse_only else a.integrator, "max_depth": a.max_depth,
                        "rr_depth": a.max_depth},
         "sensor": {
             "type": "perspective", "fov": cam["fov_y_deg"], "fov_axis": "y",
@@ -252,7 +254,8 @@ def main():
     with open(os.path.splitext(a.out)[0] + ".json", "w") as f:
         json.dump({"scene": a.scene, "width": a.width, "height": a.height, "spp": a.spp,
                    "variant": a.variant, "surfaces": a.surfaces, "sun_half_angle_deg": a.sun_half_angle_deg,
-                   "passes": a.passes, "max_depth": a.max_depth, "diffuse_only": a.diffuse_only,
+                   "passes": a.passes, "max_depth": a.max_depth, "integrator": a.integrator,
+                   "diffuse_only": a.diffuse_only,
                    "dropped": a.drop_material}, f, indent=2)
     print(f"wrote {a.out} and {png}")
 
