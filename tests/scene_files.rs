@@ -396,3 +396,30 @@ fn a_radiosity_lattice_past_the_vertex_limit_is_refused_before_it_is_built() {
         "{err}"
     );
 }
+
+#[test]
+fn radiosity_settings_need_no_patch_size() {
+    // `{"mode": "on"}` is what the plan's printout suggests; it used to fail on the missing
+    // patch_size. Without one, a quad gets 16 patches along its longer side.
+    let scene = |radiosity: serde_json::Value| {
+        let file = json!({
+            "name": "floor", "ambient": 0.1, "background_srgb": [0, 0, 0],
+            "light": {"to_light": [0, 1, 0], "color": [1, 1, 1], "intensity": 1},
+            "radiosity": radiosity,
+            "camera": {"eye": [0, 9, 22], "target": [0, 0, 0], "fov_y_deg": 35, "near": 1, "far": 200},
+            "materials": {"plaster": {"kind": "opaque", "albedo": [0.7, 0.7, 0.7]}},
+            "objects": [{"mesh": "quad", "material": "plaster",
+                         "corners": [[-20, 0, -10], [-20, 0, 10], [20, 0, 10], [20, 0, -10]]}]
+        });
+        fovea::scene::Scene::from_json(&file.to_string())
+            .unwrap_or_else(|e| panic!("{radiosity}: {e}"))
+            .mesh
+            .positions
+            .len()
+    };
+    let default = scene(json!({"mode": "on"}));
+    assert_eq!(default, scene(json!({"mode": "on", "patch_size": 2.5})));
+    assert!(default > scene(json!({"mode": "on", "patch_size": 20.0})));
+    // Off: one patch, as without radiosity settings.
+    assert_eq!(scene(json!({"mode": "off"})), 4);
+}

@@ -132,6 +132,8 @@ def main():
     p.add_argument("--max-depth", type=int, default=4096, help="path length bound (SSS needs thousands)")
     p.add_argument("--integrator", choices=["volpath", "volpathmis"], default="volpath",
                    help="volpathmis: spectral MIS, far less colour noise in chromatic media")
+    p.add_argument("--seed-offset", type=int, default=0,
+                   help="first pass's seed: runs with offsets ≥ the other's passes are independent and can be averaged")
     p.add_argument("--diffuse-only", action="store_true", help="path tracer, no media (radiosity checks)")
     p.add_argument("--drop-material", action="append", default=[], help="leave out objects of this material")
     p.add_argument("--passes", type=int, default=1, help="split the samples into passes (progress, memory)")
@@ -216,7 +218,7 @@ def main():
     scene = mi.load_dict(d)
     halves = [None, None]
     for k in range(a.passes):
-        img = np.array(mi.render(scene, seed=k), dtype=np.float64)
+        img = np.array(mi.render(scene, seed=a.seed_offset + k), dtype=np.float64)
         halves[k % 2] = img if halves[k % 2] is None else halves[k % 2] + img
         print(f"pass {k + 1}/{a.passes}", flush=True)
     img = sum(h for h in halves if h is not None) / a.passes
@@ -255,6 +257,7 @@ def main():
         json.dump({"scene": a.scene, "width": a.width, "height": a.height, "spp": a.spp,
                    "variant": a.variant, "surfaces": a.surfaces, "sun_half_angle_deg": a.sun_half_angle_deg,
                    "passes": a.passes, "max_depth": a.max_depth, "integrator": a.integrator,
+                   "seed_offset": a.seed_offset,
                    "diffuse_only": a.diffuse_only,
                    "dropped": a.drop_material}, f, indent=2)
     print(f"wrote {a.out} and {png}")

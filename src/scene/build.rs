@@ -307,7 +307,7 @@ fn check_file(file: &mut SceneFile) -> Result<(), String> {
         return Err("a scene needs at least one object".into());
     }
     if let Some(r) = &file.radiosity {
-        if !(r.patch_size.is_finite() && r.patch_size > 0.0)
+        if !r.patch_size.is_none_or(|p| p.is_finite() && p > 0.0)
             || r.max_depth > 6
             || !(r.stop_fraction > 0.0 && r.stop_fraction < 1.0)
         {
@@ -420,7 +420,10 @@ fn quad_lattice(c: &[Vec3; 4], spec: Option<&RadiositySpec>) -> Option<([u32; 2]
     }
     Some(match spec {
         Some(r) if r.mode != RadiosityMode::Off => {
-            let n = |len: f32| ((len / r.patch_size).ceil() as u32).clamp(1, 64);
+            let size = r.patch_size.unwrap_or_else(|| {
+                u.length().max(v.length()) / crate::scene::file::DEFAULT_PATCHES as f32
+            });
+            let n = |len: f32| ((len / size).ceil() as u32).clamp(1, 64);
             ([n(u.length()), n(v.length())], r.max_depth)
         }
         _ => ([1, 1], 0),

@@ -228,8 +228,10 @@ pub enum RadiosityMode {
 pub struct RadiositySpec {
     #[serde(default)]
     pub mode: RadiosityMode,
-    /// Largest patch edge, scene units (walls are split into patches no larger).
-    pub patch_size: f32,
+    /// Largest patch edge, scene units (walls are split into patches no larger). Omitted:
+    /// each quad is split into [`DEFAULT_PATCHES`] along its longer side.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub patch_size: Option<f32>,
     /// How many times an element may halve where a shot leaves a steep gradient.
     #[serde(default = "two")]
     pub max_depth: u32,
@@ -237,6 +239,10 @@ pub struct RadiositySpec {
     #[serde(default = "thousandth")]
     pub stop_fraction: f64,
 }
+
+/// Patches along a quad's longer side when the scene gives no `patch_size`: fine enough for
+/// a floor's bounce to fall off across it, coarse enough for a fast solve.
+pub const DEFAULT_PATCHES: u32 = 16;
 
 fn two() -> u32 {
     2

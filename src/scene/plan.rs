@@ -369,7 +369,7 @@ mod tests {
         let mut file: crate::scene::SceneFile = serde_json::from_str(marble).unwrap();
         file.radiosity = Some(crate::scene::RadiositySpec {
             mode: crate::scene::RadiosityMode::On,
-            patch_size: 2.0,
+            patch_size: Some(2.0),
             max_depth: 2,
             stop_fraction: 0.001,
         });
