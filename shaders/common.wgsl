@@ -82,6 +82,8 @@ struct Material {
     // The specular lobe's directional albedo split E(μ) = F0·A + F90·B at LOBE_TABLE values
     // of μ: entry i is (A, B) in lobe[i / 2].xy (even i) or .zw (odd i).
     lobe: array<vec4<f32>, 8>,
+    // xy: the table's cosine-weighted hemisphere averages of A and B; zw unused.
+    lobe_average: vec4<f32>,
 }
 
 // A node of the light-space photon pyramid.
@@ -90,6 +92,9 @@ struct PhotonNode {
     pos_extent: vec4<f32>,
     // rgb: flux (light × mm²); w: scalar weight (luminance of the flux).
     flux: vec4<f32>,
+    // x: the surface its photons enter through (mm²), which the gathers weigh like the flux to
+    // find how much of R_d's reach around a point the photons cover; yzw unused.
+    area: vec4<f32>,
 }
 
 // ---- Microfacet specular (CPU twin: optics::specular; Karis's UE4 form) ----
@@ -113,6 +118,17 @@ fn lobe_albedo(m: Material, f0: vec3<f32>, mu: f32) -> vec3<f32> {
         return vec3<f32>(0.0);
     }
     return lobe_albedo_always(m, f0, mu);
+}
+
+// The share of light arriving evenly over the hemisphere that the lobe reflects, so the
+// diffuse part receives 1 − this of the sky and of radiosity's irradiance
+// (optics::specular::lobe_average).
+fn lobe_average(m: Material, f0: vec3<f32>) -> vec3<f32> {
+    if (has_mode(MODE_NO_SPECULAR)) {
+        return vec3<f32>(0.0);
+    }
+    let ab = m.lobe_average.xy;
+    return clamp(f0 * ab.x + f90_of(f0) * ab.y, vec3<f32>(0.0), vec3<f32>(1.0));
 }
 
 // `lobe_albedo` whatever the frame's mode: for passes without the frame uniform (photons).

@@ -39,6 +39,7 @@ fn leaves(@builtin(global_invocation_id) id: vec3<u32>) {
     var node: PhotonNode;
     node.pos_extent = vec4<f32>(pos.xyz, 0.0);
     node.flux = vec4<f32>(0.0);
+    node.area = vec4<f32>(0.0);
     if (pos.w > 0.5 && nrm.w > 0.5) {
         let m = materials[u32(round(nrm.w)) - 1u];
         let cos_i = dot(nrm.xyz, photons.to_light.xyz);
@@ -53,6 +54,7 @@ fn leaves(@builtin(global_invocation_id) id: vec3<u32>) {
         let extent = 0.7071 * photons.params.z / max(cos_i, 0.2);
         node.pos_extent = vec4<f32>(pos.xyz, extent);
         node.flux = vec4<f32>(flux, dot(flux, vec3<f32>(0.2126, 0.7152, 0.0722)));
+        node.area = vec4<f32>(photons.params.y / max(cos_i, 0.2), 0.0, 0.0, 0.0);
     }
     nodes[level.z + id.y * side + id.x] = node;
 }
@@ -66,15 +68,18 @@ fn reduce(@builtin(global_invocation_id) id: vec3<u32>) {
     let child_side = side * 2u;
     var children: array<PhotonNode, 4>;
     var flux = vec4<f32>(0.0);
+    var area = vec4<f32>(0.0);
     var centre = vec3<f32>(0.0);
     for (var k = 0u; k < 4u; k++) {
         let c = id.xy * 2u + vec2<u32>(k & 1u, k >> 1u);
         children[k] = nodes[level.w + c.y * child_side + c.x];
         flux += children[k].flux;
+        area += children[k].area;
         centre += children[k].pos_extent.xyz * children[k].flux.w;
     }
     var node: PhotonNode;
     node.flux = flux;
+    node.area = area;
     node.pos_extent = vec4<f32>(0.0);
     if (flux.w > 0.0) {
         centre /= flux.w;

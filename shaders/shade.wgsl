@@ -103,21 +103,38 @@ fn softening_gain(m: Material, s: f32) -> vec3<f32> {
     return select(vec3<f32>(1.0), max(total / beyond, vec3<f32>(1.0)), beyond > vec3<f32>(0.0));
 }
 
+// A gather's light, Σ R_d Φ, and how much of R_d's reach around the point the photons cover,
+// Σ R_d A over the total diffuse reflectance (1 inside a lit region, ~½ at its edge, 0 far
+// from it): radiosity's irradiance enters locally where they do not (see `shade`).
+struct Gathered {
+    light: vec3<f32>,
+    coverage: vec3<f32>,
+}
+
+fn gathered(m: Material, light: vec3<f32>, rd_area: vec3<f32>) -> Gathered {
+    let total = reflectance_beyond(m, 0.0);
+    let coverage = select(vec3<f32>(1.0), rd_area / total, total > vec3<f32>(0.0));
+    return Gathered(light, coverage);
+}
+
 // Σ R_d(|x_c − x_o|) Φ_c over every photon (eq. 8).
-fn gather_all(x_o: vec3<f32>, m: Material) -> vec3<f32> {
+fn gather_all(x_o: vec3<f32>, m: Material) -> Gathered {
     let n = frame.photon_side;
     var sum = vec3<f32>(0.0);
+    var rd_area = vec3<f32>(0.0);
     for (var i = 0u; i < n * n; i++) {
         let node = nodes[i];
         if (node.flux.w > 0.0) {
-            sum += leaf_rd(m, node, x_o) * node.flux.rgb;
+            let rd = leaf_rd(m, node, x_o);
+            sum += rd * node.flux.rgb;
+            rd_area += rd * node.area.x;
         }
     }
-    return sum;
+    return gathered(m, sum, rd_area);
 }
 
 // Σ R_d Φ over a cut through the pyramid (eq. 10), depth first from the start level.
-fn gather_cut(x_o: vec3<f32>, m: Material) -> vec3<f32> {
+fn gather_cut(x_o: vec3<f32>, m: Material) -> Gathered {
     let start = frame.photon_start_level;
     let cut_level = frame.cut_level;
     let eps = frame.cut_epsilon;
@@ -125,6 +142,7 @@ fn gather_cut(x_o: vec3<f32>, m: Material) -> vec3<f32> {
     // Every cluster is softened by the same photon radius: one gain for all of them.
     let cluster_gain = softening_gain(m, frame.photon_radius_mm);
     var sum = vec3<f32>(0.0);
+    var rd_area = vec3<f32>(0.0);
     var stack: array<vec2<u32>, 32>;
     for (var r = 0u; r < roots; r++) {
         stack[0] = vec2<u32>(start, r);
@@ -139,11 +157,15 @@ fn gather_cut(x_o: vec3<f32>, m: Material) -> vec3<f32> {
             }
             let d = distance(node.pos_extent.xyz, x_o);
             if (level == 0u) {
-                sum += leaf_rd(m, node, x_o) * node.flux.rgb;
+                let rd = leaf_rd(m, node, x_o);
+                sum += rd * node.flux.rgb;
+                rd_area += rd * node.area.x;
                 continue;
             }
             if (level <= cut_level || node.pos_extent.w < eps * d) {
-                sum += dipole_rd(m, cluster_distance_mm(node, x_o)) * cluster_gain * node.flux.rgb;
+                let rd = dipole_rd(m, cluster_distance_mm(node, x_o)) * cluster_gain;
+                sum += rd * node.flux.rgb;
+                rd_area += rd * node.area.x;
                 continue;
             }
             let side = level_side(level);
@@ -156,7 +178,7 @@ fn gather_cut(x_o: vec3<f32>, m: Material) -> vec3<f32> {
             }
         }
     }
-    return sum;
+    return gathered(m, sum, rd_area);
 }
 
 fn shade(p: vec2<i32>) {
@@ -189,13 +211,15 @@ fn shade(p: vec2<i32>) {
             let diffuse = a.rgb * (1.0 - m.surface.y);
             let f0 = specular_f0(m, a.rgb);
             // The ambient light is a uniform sky: the lobe returns E(μ_o) of it, the diffuse
-            // part what crosses the interface (so metals are not black where no light hits).
+            // part what crosses the interface both ways, 1 − E(μ_o) out and the hemisphere's
+            // average 1 − E_avg in (so metals are not black where no light hits).
             let e_o = lobe_albedo(m, f0, dot(n, v));
-            let ambient = frame.light * sky * (diffuse * (1.0 - e_o) + e_o);
+            let through = diffuse * (1.0 - e_o) * (1.0 - lobe_average(m, f0));
+            let ambient = frame.light * sky * (through + e_o);
             // Radiosity's irradiance is treated like the sky: the lobe reflects E(μ_o) of it (a
             // glossy object shows the lit floor under it), the diffuse part what crosses.
             rgb = key * surface_light(m, f0, diffuse, n, v, l) + extra_lights(m, f0, diffuse, n, v, x)
-                + gi * (diffuse * (1.0 - e_o) + e_o) + ambient;
+                + gi * (through + e_o) + ambient;
         } else {
             let f0 = vec3<f32>(m.surface.z);
             let e_o = lobe_albedo(m, f0, dot(n, v));
@@ -205,10 +229,6 @@ fn shade(p: vec2<i32>) {
             // The interface's reflection of every light, and the extra lights' diffuse part.
             let surface = key * max(cos_i, 0.0) * specular_lobe(m, f0, n, v, l)
                 + extra_lights(m, f0, m.albedo.rgb, n, v, x);
-            // The photons carry radiosity's irradiance where they enter: on the side facing the
-            // key light. The other side's (a floor's bounce onto an object's underside) enters
-            // locally, through the dipole's total diffuse reflectance, as on the opaque rung.
-            let unseen_gi = m.albedo.rgb * gi * select(0.0, 1.0, cos_i <= 0.0);
             var body: vec3<f32>;
             if (rung == RUNG_OPAQUE) {
                 body = m.albedo.rgb * (key * max(cos_i, 0.0) * transmitted(m, cos_i) + gi) * t_out;
@@ -219,10 +239,19 @@ fn shade(p: vec2<i32>) {
                 body = m.albedo.rgb * (key * max(cos_b, 0.0) * transmitted(m, cos_b / len) + gi) * t_out;
             } else if (rung == RUNG_SCREEN) {
                 body = m.albedo.rgb * (diffused[index_of(p)].rgb + gi) * t_out;
-            } else if (rung == RUNG_BRUTE_FORCE) {
-                body = (gather_all(x, m) + unseen_gi) * t_out;
             } else {
-                body = (gather_cut(x, m) + unseen_gi) * t_out;
+                // The photons carry radiosity's irradiance only where they enter, on the side
+                // facing the key light; what R_d's reach around x they do not cover (a floor's
+                // bounce onto an object's underside) enters locally, through the total diffuse
+                // reflectance as on the opaque rung, so the two meet without a seam.
+                var g: Gathered;
+                if (rung == RUNG_BRUTE_FORCE) {
+                    g = gather_all(x, m);
+                } else {
+                    g = gather_cut(x, m);
+                }
+                let uncovered = clamp(vec3<f32>(1.0) - g.coverage, vec3<f32>(0.0), vec3<f32>(1.0));
+                body = (g.light + m.albedo.rgb * gi * uncovered) * t_out;
             }
             rgb = body + ambient + surface;
         }

@@ -120,6 +120,32 @@ pub fn lobe_albedo(table: &[[f64; 2]; ALBEDO_TABLE], f0: f64, mu: f64) -> f64 {
     (ab(i) * (1.0 - t) + ab(i + 1) * t).clamp(0.0, 1.0)
 }
 
+/// The table's cosine-weighted hemisphere averages 2∫A(μ)μ dμ and 2∫B(μ)μ dμ (trapezoids on
+/// its μ grid): with them F0·A + F90·B is the share of light arriving evenly from every
+/// direction that the lobe reflects, so the diffuse part receives 1 − that (`surface`'s
+/// diffuse term is not renormalised for it).
+pub fn lobe_average_split(table: &[[f64; 2]; ALBEDO_TABLE]) -> [f64; 2] {
+    let last = (ALBEDO_TABLE - 1) as f64;
+    let mut sum = [0.0; 2];
+    for (i, ab) in table.iter().enumerate() {
+        let w = if i == 0 || i == ALBEDO_TABLE - 1 {
+            0.5
+        } else {
+            1.0
+        };
+        let mu = i as f64 / last;
+        sum[0] += w * ab[0] * mu;
+        sum[1] += w * ab[1] * mu;
+    }
+    sum.map(|s| 2.0 * s / last)
+}
+
+/// F0·A + F90·B with [`lobe_average_split`]'s averages, in [0, 1].
+pub fn lobe_average(table: &[[f64; 2]; ALBEDO_TABLE], f0: f64) -> f64 {
+    let [a, b] = lobe_average_split(table);
+    (f0 * a + (50.0 * f0).min(1.0) * b).clamp(0.0, 1.0)
+}
+
 /// Everything a surface reflects towards v from a unit light along l (×π convention): the
 /// diffuse part `diffuse` (an albedo, or the dipole's total reflectance) scaled by what crosses
 /// the interface both ways, plus the specular lobe. Cosines of unit vectors.
@@ -185,6 +211,33 @@ mod tests {
         // A white metal (F0 = 1) returns most of the light at normal incidence.
         let metal = furnace(0.0, 1.0, 0.5, 1.0);
         assert!(metal > 0.85 && metal <= 1.02, "{metal}");
+    }
+
+    #[test]
+    fn the_sky_reaches_the_diffuse_part_through_the_lobes_average() {
+        // The diffuse part of what the shader gives a uniform sky, ρ(1 − E(μ_o))(1 − E_avg),
+        // is the furnace integral of `surface`'s diffuse term (the lobe's E(μ_o) is held to
+        // its own integral by the table tests), for any roughness, index and view.
+        for roughness in [0.1, 0.5, 1.0] {
+            let table = directional_albedo_table(alpha(roughness));
+            for ior in [1.0, 1.5, 2.0] {
+                let f0 = f0_of_ior(ior);
+                let e_avg = lobe_average(&table, f0);
+                assert!(
+                    (0.0..0.5).contains(&e_avg),
+                    "r {roughness} η {ior}: {e_avg}"
+                );
+                for mu in [0.2, 0.6, 1.0] {
+                    let e_o = lobe_albedo(&table, f0, mu);
+                    let sky = 0.8 * (1.0 - e_o) * (1.0 - e_avg);
+                    let furnace = furnace(0.8, f0, roughness, mu) - furnace(0.0, f0, roughness, mu);
+                    assert!(
+                        (sky - furnace).abs() < 0.01,
+                        "r {roughness} η {ior} μ {mu}: formula {sky}, furnace {furnace}"
+                    );
+                }
+            }
+        }
     }
 
     #[test]

@@ -172,7 +172,8 @@ fn shade(
                 v.dot(h),
             );
             let e_o = specular::lobe_albedo(table, f0, nrm.dot(v));
-            radiance[c] * (lit + ambient * (diffuse * (1.0 - e_o) + e_o))
+            let e_avg = specular::lobe_average(table, f0);
+            radiance[c] * (lit + ambient * (diffuse * (1.0 - e_o) * (1.0 - e_avg) + e_o))
         });
         rgba.extend_from_slice(&[
             linear_to_srgb8(c[0] as f32),

@@ -59,9 +59,13 @@ impl Renderer {
             photons: match nodes {
                 Some(nodes) => {
                     let n = (PHOTON_SIDE * PHOTON_SIDE) as usize;
-                    let all: Vec<[f32; 8]> =
+                    // A node is 12 floats (`PhotonNode`); the covered area is left out.
+                    let all: Vec<[f32; 12]> =
                         bytemuck::pod_collect_to_vec(&read_buffer(&self.gpu, nodes)?);
-                    all[..n.min(all.len())].to_vec()
+                    all.iter()
+                        .take(n)
+                        .map(|node| std::array::from_fn(|k| node[k]))
+                        .collect()
                 }
                 None => Vec::new(),
             },

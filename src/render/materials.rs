@@ -27,12 +27,14 @@ pub struct GpuMaterial {
     pub wrap: [u32; 4],
     /// The lobe's directional-albedo table, two (A, B) entries per vec4.
     pub lobe: [[f32; 4]; ALBEDO_TABLE / 2],
+    /// xy: the table's hemisphere averages (`specular::lobe_average_split`); zw unused.
+    pub lobe_average: [f32; 4],
 }
 
 /// The interface half of a material: its α, metallic, F0 and lobe table (zeros for emitters).
-fn interface(m: &Material) -> (u32, [f32; 4], [[f32; 4]; ALBEDO_TABLE / 2]) {
+fn interface(m: &Material) -> (u32, [f32; 4], [[f32; 4]; ALBEDO_TABLE / 2], [f32; 4]) {
     let Some(s) = m.surface() else {
-        return (0, [0.0; 4], [[0.0; 4]; ALBEDO_TABLE / 2]);
+        return (0, [0.0; 4], [[0.0; 4]; ALBEDO_TABLE / 2], [0.0; 4]);
     };
     let alpha = specular::alpha(s.roughness);
     let table = &s.lobe;
@@ -41,7 +43,9 @@ fn interface(m: &Material) -> (u32, [f32; 4], [[f32; 4]; ALBEDO_TABLE / 2]) {
         [a[0] as f32, a[1] as f32, b[0] as f32, b[1] as f32]
     });
     let surface = [alpha as f32, s.metallic as f32, s.dielectric_f0 as f32, 0.0];
-    (u32::from(s.double_sided), surface, lobe)
+    let [a, b] = specular::lobe_average_split(table);
+    let average = [a as f32, b as f32, 0.0, 0.0];
+    (u32::from(s.double_sided), surface, lobe, average)
 }
 
 /// The scene's materials; `subsurface` says which translucent ones get the subsurface rungs
@@ -54,7 +58,7 @@ pub fn gpu_materials(scene: &Scene, plan: Option<&Plan>) -> Vec<GpuMaterial> {
         .map(|(id, (_, m))| {
             let albedo = m.albedo();
             let rgba = |v: [f64; 3]| [v[0] as f32, v[1] as f32, v[2] as f32, 0.0];
-            let (double_sided, mut surface, lobe) = interface(m);
+            let (double_sided, mut surface, lobe, lobe_average) = interface(m);
             // The base colour texture's layer, −1 for none.
             surface[3] = scene
                 .material_textures
@@ -96,6 +100,7 @@ pub fn gpu_materials(scene: &Scene, plan: Option<&Plan>) -> Vec<GpuMaterial> {
                     maps,
                     wrap,
                     lobe,
+                    lobe_average,
                     ..Default::default()
                 },
                 Material::Translucent { eta, dipole, .. } => GpuMaterial {
@@ -107,6 +112,7 @@ pub fn gpu_materials(scene: &Scene, plan: Option<&Plan>) -> Vec<GpuMaterial> {
                     maps,
                     wrap,
                     lobe,
+                    lobe_average,
                     albedo: rgba(albedo),
                     sigma_tr: rgba(dipole.map(|d| d.sigma_tr)),
                     z_r: rgba(dipole.map(|d| d.z_r)),

@@ -87,7 +87,7 @@ impl SceneGpu {
             // Bound in place of the pyramid when the scene has none.
             None => device.create_buffer(&wgpu::BufferDescriptor {
                 label: Some("photons.none"),
-                size: 32,
+                size: 48,
                 usage: wgpu::BufferUsages::STORAGE,
                 mapped_at_creation: false,
             }),

@@ -145,7 +145,7 @@ impl PhotonPass {
             "photons.depth",
             tex("photons.depth", F::Depth32Float, depth_usage),
         );
-        let nodes = buffer("photons.nodes", node_count() * 32, B::STORAGE | B::COPY_SRC);
+        let nodes = buffer("photons.nodes", node_count() * 48, B::STORAGE | B::COPY_SRC);
         r.buffer("photons.nodes", nodes);
         let uniform_size = std::mem::size_of::<PhotonUniform>() as u64;
         let uniform = buffer("photons.uniform", uniform_size, B::UNIFORM | B::COPY_DST);
