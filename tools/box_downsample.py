@@ -11,18 +11,27 @@ import numpy as np
 from PIL import Image
 
 
+def load_linear(path):
+    """An sRGB PNG as linear RGB floats."""
+    c = np.asarray(Image.open(path).convert("RGB"), dtype=np.float64) / 255.0
+    return np.where(c <= 0.04045, c / 12.92, ((c + 0.055) / 1.055) ** 2.4)
+
+
+def save_srgb(lin, path):
+    """Linear RGB floats as an 8-bit sRGB PNG (clipped to [0, 1])."""
+    s = np.where(lin <= 0.0031308, 12.92 * lin, 1.055 * np.power(np.maximum(lin, 0), 1 / 2.4) - 0.055)
+    Image.fromarray(np.round(np.clip(s, 0, 1) * 255).astype(np.uint8)).save(path)
+
+
 def main():
     if len(sys.argv) != 4:
         raise SystemExit(__doc__)
     src, dst, k = sys.argv[1], sys.argv[2], int(sys.argv[3])
-    c = np.asarray(Image.open(src).convert("RGB"), dtype=np.float64) / 255.0
-    h, w = c.shape[0] // k, c.shape[1] // k
-    if k < 1 or h == 0 or w == 0 or c.shape[0] % k or c.shape[1] % k:
-        raise SystemExit(f"{src}: {c.shape[1]}x{c.shape[0]} is not a multiple of {k}")
-    lin = np.where(c <= 0.04045, c / 12.92, ((c + 0.055) / 1.055) ** 2.4)
-    lin = lin.reshape(h, k, w, k, 3).mean(axis=(1, 3))
-    s = np.where(lin <= 0.0031308, 12.92 * lin, 1.055 * np.power(lin, 1 / 2.4) - 0.055)
-    Image.fromarray(np.round(np.clip(s, 0, 1) * 255).astype(np.uint8)).save(dst)
+    lin = load_linear(src)
+    h, w = lin.shape[0] // k, lin.shape[1] // k
+    if k < 1 or h == 0 or w == 0 or lin.shape[0] % k or lin.shape[1] % k:
+        raise SystemExit(f"{src}: {lin.shape[1]}x{lin.shape[0]} is not a multiple of {k}")
+    save_srgb(lin.reshape(h, k, w, k, 3).mean(axis=(1, 3)), dst)
 
 
 if __name__ == "__main__":
