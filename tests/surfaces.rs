@@ -137,7 +137,7 @@ fn every_shipped_scene_renders_finite() {
         .collect();
     let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/models");
     let folder = Folder::open(&dir).unwrap();
-    for glb in ["lamps.glb"] {
+    for glb in ["lamps.glb", "media-bunnies.glb"] {
         let s = Scene::load(&dir.join(glb), &folder).unwrap();
         names.push(s.name().to_string());
         r.add_scene(s).unwrap();

@@ -281,7 +281,9 @@ def lamps(bunny):
 
 # Jensen et al. 2001's measured media (σ's, σa per mm), as in src/scene/material.rs.
 JENSEN = {"marble": ([2.19, 2.62, 3.00], [0.0021, 0.0041, 0.0071]),
-          "skin1": ([0.74, 0.88, 1.01], [0.032, 0.17, 0.48])}
+          "skin1": ([0.74, 0.88, 1.01], [0.032, 0.17, 0.48]),
+          "wholemilk": ([2.55, 3.21, 3.77], [0.0011, 0.0024, 0.014]),
+          "ketchup": ([0.18, 0.07, 0.03], [0.061, 0.97, 1.45])}
 
 
 def jensen_volume(sigma_s, sigma_a, eta=1.3):
@@ -301,23 +303,49 @@ def jensen_volume(sigma_s, sigma_a, eta=1.3):
     return colour, distance_mm / 1000.0, attenuation
 
 
-def bunny_scene(bunny, medium, to_light, light_colour):
-    """A built-in bunny scene as glTF: the bunny in `medium`, back-lit, its camera."""
-    g = Glb()
+def jensen_material(g, medium):
+    """One of Jensen 2001's media as a glTF material Fovea maps back to its coefficients."""
     colour, distance, attenuation = jensen_volume(*JENSEN[medium])
-    m = g.material(
+    return g.material(
         {"name": medium, "pbrMetallicRoughness": {"baseColorFactor": colour + [1.0],
                                                   "metallicFactor": 0.0, "roughnessFactor": 0.3}},
         {"KHR_materials_diffuse_transmission": {"diffuseTransmissionFactor": 1.0},
          "KHR_materials_volume": {"thicknessFactor": 0.05, "attenuationDistance": distance,
                                   "attenuationColor": attenuation},
          "KHR_materials_ior": {"ior": 1.3}})
+
+
+def bunny_scene(bunny, medium, to_light, light_colour):
+    """A built-in bunny scene as glTF: the bunny in `medium`, back-lit, its camera."""
+    g = Glb()
+    m = jensen_material(g, medium)
     g.node({"mesh": g.mesh("bunny", bunny[0], bunny[1], m)})
     key = g.light({"type": "directional", "name": "back light", "color": light_colour, "intensity": 2.5})
     g.node({"light": key, "rotation": look_rotation(to_light, [0, 0, 0])})
     g.doc["cameras"] = [{"type": "perspective", "perspective": {"yfov": math.radians(32), "znear": 0.01, "zfar": 1.0}}]
     eye = [0.0, 0.07, 0.24]
     g.node({"camera": 0, "translation": eye, "rotation": look_rotation(eye, [0.0, 0.046, 0.0])})
+    return g
+
+
+def materials_scene(bunny):
+    """The built-in `materials` scene as glTF: marble, skin, whole milk and ketchup bunnies
+    beside a plaster one on a plaster floor, lit from behind and to the side (lengths in
+    metres: the scene file's units are centimetres)."""
+    g = Glb()
+    plaster = g.material({"name": "plaster", "pbrMetallicRoughness": {
+        "baseColorFactor": [0.75, 0.73, 0.70, 1.0], "metallicFactor": 0.0, "roughnessFactor": 0.5}})
+    for k, medium in enumerate(["marble", "skin1", "wholemilk", "ketchup", None]):
+        m = plaster if medium is None else jensen_material(g, medium)
+        mesh = g.mesh("bunny-" + (medium or "plaster"), bunny[0], bunny[1], m)
+        g.node({"mesh": mesh, "translation": [-0.12 + 0.06 * k, 0.0, 0.0], "scale": [0.6] * 3})
+    pos, idx, _ = floor(0.4, 1)
+    g.node({"mesh": g.mesh("floor", pos, idx, plaster)})
+    key = g.light({"type": "directional", "name": "key", "color": [1.0, 0.96, 0.9], "intensity": 1.0})
+    g.node({"light": key, "rotation": look_rotation([0.55, 0.5, -0.67], [0, 0, 0])})
+    g.doc["cameras"] = [{"type": "perspective", "perspective": {"yfov": math.radians(36), "znear": 0.01, "zfar": 2.0}}]
+    eye = [0.0, 0.10, 0.38]
+    g.node({"camera": 0, "translation": eye, "rotation": look_rotation(eye, [0.0, 0.03, 0.0])})
     return g
 
 
@@ -337,3 +365,4 @@ if __name__ == "__main__":
     for medium, name in [("marble", "marble-bunny"), ("skin1", "skin-bunny")]:
         bunny_scene(cm, medium, [0.35, 0.45, -0.82], [1.0, 0.96, 0.9]).write(
             os.path.join(ROOT, "assets", "models", name + ".glb"))
+    materials_scene(cm).write(os.path.join(ROOT, "assets", "models", "media-bunnies.glb"))
