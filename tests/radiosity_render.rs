@@ -117,22 +117,24 @@ fn renderers_share_one_solve_and_open_scenes_have_none() {
     assert!(a.render(&req).unwrap().radiosity.is_none());
 }
 
-#[test]
-fn a_sunlit_floor_lights_the_bunny_on_it_when_the_scene_asks_for_radiosity() {
-    // No emitter and no ambient: with radiosity on, the key light's first bounce is the only
-    // light the bunny's shaded side gets.
+/// Towards the key light of the sunlit-floor scenes.
+const TO_LIGHT: [f32; 3] = [-0.5, 0.7, 0.6];
+
+/// A bunny of `material` on a plaster floor under a sun, no emitter and no ambient, radiosity
+/// on; the renderer holds it with its solve converged.
+fn sunlit_bunny(name: &str, material: serde_json::Value) -> Renderer {
     let scene = fovea::scene::Scene::from_json(
         &serde_json::json!({
-            "name": "sunlit-floor", "ambient": 0.0, "background_srgb": [0, 0, 0],
-            "light": {"to_light": [-0.5, 0.7, 0.6], "color": [1, 1, 1], "intensity": 1},
+            "name": name, "ambient": 0.0, "background_srgb": [0, 0, 0],
+            "light": {"to_light": TO_LIGHT, "color": [1, 1, 1], "intensity": 1},
             "camera": {"eye": [0, 9, 22], "target": [0, 3, 0], "fov_y_deg": 35, "near": 1, "far": 200},
             "radiosity": {"mode": "on", "patch_size": 2.5},
             "materials": {
-                "white": {"kind": "opaque", "albedo": [0.8, 0.8, 0.8], "roughness": 0.9},
+                "bunny": material,
                 "plaster": {"kind": "opaque", "albedo": [0.7, 0.7, 0.7], "roughness": 0.9}
             },
             "objects": [
-                {"mesh": "bunny.ply", "material": "white", "scale": 0.7},
+                {"mesh": "bunny.ply", "material": "bunny", "scale": 0.7},
                 {"mesh": "quad", "material": "plaster",
                  "corners": [[-20, 0, -20], [-20, 0, 20], [20, 0, 20], [20, 0, -20]]}
             ]
@@ -142,25 +144,46 @@ fn a_sunlit_floor_lights_the_bunny_on_it_when_the_scene_asks_for_radiosity() {
     .unwrap();
     let mut r = renderer();
     r.add_scene(scene).unwrap();
-    let solve = r
-        .radiosity("sunlit-floor")
-        .unwrap()
-        .expect("mode on runs it");
+    let solve = r.radiosity(name).unwrap().expect("mode on runs it");
     let snap = solve.wait(Duration::from_secs(600)).expect("a snapshot");
     assert!(snap.converged, "{:?}", snap.stats);
-    let shot = |r: &mut Renderer, indirect: bool, stream: u64| {
-        let mut req = FrameRequest::new("sunlit-floor", W, H);
-        req.settings = fovea::settings::RenderSettings::of(fovea::settings::Preset::Full);
-        req.settings.indirect = indirect;
-        req.stream = stream;
-        req.marker = false;
-        r.render(&req).unwrap();
-        r.inspect(stream, "sunlit-floor", W, H).unwrap()
-    };
-    let (lit, dark) = (shot(&mut r, true, 1), shot(&mut r, false, 2));
-    // The bunny's sides facing away from the light and down see the floor, never the sun.
-    let l = glam::Vec3::new(-0.5, 0.7, 0.6).normalize();
-    let away = |n: [f32; 3]| bunny(n) && glam::Vec3::from(n).dot(l) < -0.1 && n[1] < 0.0;
+    r
+}
+
+/// One `full` frame of `name` at `rung` (None: the preset's), with or without radiosity's
+/// interreflected light.
+fn sunlit_shot(
+    r: &mut Renderer,
+    name: &str,
+    rung: Option<fovea::settings::Rung>,
+    indirect: bool,
+    stream: u64,
+) -> Inspection {
+    let mut req = FrameRequest::new(name, W, H);
+    req.settings = fovea::settings::RenderSettings::of(fovea::settings::Preset::Full);
+    if let Some(rung) = rung {
+        req.settings.translucency.rung = rung;
+    }
+    req.settings.indirect = indirect;
+    req.stream = stream;
+    req.marker = false;
+    r.render(&req).unwrap();
+    r.inspect(stream, name, W, H).unwrap()
+}
+
+/// The bunny's sides facing away from the light and down: they see the floor, never the sun.
+fn away(n: [f32; 3]) -> bool {
+    bunny(n) && glam::Vec3::from(n).dot(glam::Vec3::from(TO_LIGHT).normalize()) < -0.1 && n[1] < 0.0
+}
+
+#[test]
+fn a_sunlit_floor_lights_the_bunny_on_it_when_the_scene_asks_for_radiosity() {
+    // No emitter and no ambient: with radiosity on, the key light's first bounce is the only
+    // light the bunny's shaded side gets.
+    let white = serde_json::json!({"kind": "opaque", "albedo": [0.8, 0.8, 0.8], "roughness": 0.9});
+    let mut r = sunlit_bunny("sunlit-floor", white);
+    let lit = sunlit_shot(&mut r, "sunlit-floor", None, true, 1);
+    let dark = sunlit_shot(&mut r, "sunlit-floor", None, false, 2);
     let (b_lit, b_dark) = (mean(&lit, away, 0..W)[1], mean(&dark, away, 0..W)[1]);
     assert!(
         b_dark < 1e-3 && b_lit > 0.05,
@@ -180,54 +203,13 @@ fn the_floors_bounce_reaches_a_translucent_bodys_far_side_on_every_rung() {
     // key light; the side facing away gets the floor's bounce locally. On every rung the
     // bounce adds about what it adds on the opaque one (albedo × irradiance through the
     // interface), not only the interface's reflection of it.
-    let scene = fovea::scene::Scene::from_json(
-        &serde_json::json!({
-            "name": "sunlit-marble", "ambient": 0.0, "background_srgb": [0, 0, 0],
-            "mm_per_unit": 10.0,
-            "light": {"to_light": [-0.5, 0.7, 0.6], "color": [1, 1, 1], "intensity": 1},
-            "camera": {"eye": [0, 9, 22], "target": [0, 3, 0], "fov_y_deg": 35, "near": 1, "far": 200},
-            "radiosity": {"mode": "on", "patch_size": 2.5},
-            "materials": {
-                "marble": {"kind": "translucent", "preset": "marble", "roughness": 0.3},
-                "plaster": {"kind": "opaque", "albedo": [0.7, 0.7, 0.7], "roughness": 0.9}
-            },
-            "objects": [
-                {"mesh": "bunny.ply", "material": "marble", "scale": 0.7},
-                {"mesh": "quad", "material": "plaster",
-                 "corners": [[-20, 0, -20], [-20, 0, 20], [20, 0, 20], [20, 0, -20]]}
-            ]
-        })
-        .to_string(),
-    )
-    .unwrap();
-    let mut r = renderer();
-    r.add_scene(scene).unwrap();
-    let solve = r
-        .radiosity("sunlit-marble")
-        .unwrap()
-        .expect("mode on runs it");
-    assert!(
-        solve
-            .wait(Duration::from_secs(600))
-            .expect("a snapshot")
-            .converged
-    );
+    let marble = serde_json::json!({"kind": "translucent", "preset": "marble", "roughness": 0.3});
+    let mut r = sunlit_bunny("sunlit-marble", marble);
     let mut stream = 0;
-    let mut shot = |r: &mut Renderer, rung: fovea::settings::Rung, indirect: bool| {
-        let mut req = FrameRequest::new("sunlit-marble", W, H);
-        req.settings = fovea::settings::RenderSettings::of(fovea::settings::Preset::Full);
-        req.settings.translucency.rung = rung;
-        req.settings.indirect = indirect;
-        stream += 1;
-        req.stream = stream;
-        req.marker = false;
-        r.render(&req).unwrap();
-        r.inspect(stream, "sunlit-marble", W, H).unwrap()
-    };
-    let l = glam::Vec3::new(-0.5, 0.7, 0.6).normalize();
-    let away = |n: [f32; 3]| bunny(n) && glam::Vec3::from(n).dot(l) < -0.1 && n[1] < 0.0;
     let mut gain = |r: &mut Renderer, rung| {
-        let (lit, dark) = (shot(r, rung, true), shot(r, rung, false));
+        stream += 2;
+        let lit = sunlit_shot(r, "sunlit-marble", Some(rung), true, stream);
+        let dark = sunlit_shot(r, "sunlit-marble", Some(rung), false, stream + 1);
         mean(&lit, away, 0..W)[1] - mean(&dark, away, 0..W)[1]
     };
     use fovea::settings::Rung;
