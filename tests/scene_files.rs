@@ -288,11 +288,13 @@ fn explain_runs_on_every_shipped_scene() {
         .into_iter()
         .map(|n| vec!["--scene".to_string(), n.to_string()])
         .collect();
-    // The built-in list includes the gallery model; lamps is served from assets/models.
-    runs.push(vec![
-        "--model".into(),
-        format!("{}/assets/models/lamps.glb", env!("CARGO_MANIFEST_DIR")),
-    ]);
+    // The built-in list includes the gallery model; the rest are served from assets/models.
+    let models = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/models");
+    for model in std::fs::read_dir(&models).unwrap() {
+        let path = model.unwrap().path();
+        runs.push(vec!["--model".into(), path.display().to_string()]);
+    }
+    assert!(runs.len() >= 14, "{runs:?}");
     for args in runs {
         let out = std::process::Command::new(exe)
             .arg("render")
@@ -331,6 +333,29 @@ fn emissive_gltf_materials_become_area_lights_with_their_strength() {
     let s = load(&dir, "lamp.gltf").unwrap();
     assert_eq!(s.materials[0].1.emission(), [4.0, 2.0, 1.0]);
     assert!(s.has_emitter(), "radiosity's auto mode sees an emitter");
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn a_gltf_room_lit_by_its_lamp_alone_gets_no_default_sun_or_sky() {
+    // cornell-box.glb has no punctual light: its emissive lamp lights the box through
+    // radiosity, as the built-in cornell's does; a default sun would shine through the walls.
+    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/models");
+    let folder = Folder::open(&dir).unwrap();
+    let room = Scene::load(&dir.join("cornell-box.glb"), &folder).unwrap();
+    assert_eq!((room.file.light.intensity, room.file.ambient), (0.0, 0.0));
+    let plan = fovea::scene::plan::Plan::of(&room, 64, 48);
+    assert!(plan.radiosity, "{}", plan.radiosity_reason);
+    // A glTF with no lights and no lamp keeps the default key light and sky.
+    let dir = scratch("unlit");
+    std::fs::write(dir.join("tri.bin"), triangle_bin(GOOD, [0, 1, 2])).unwrap();
+    std::fs::write(
+        dir.join("tri.gltf"),
+        triangle_gltf("tri.bin", 48).to_string(),
+    )
+    .unwrap();
+    let plain = load(&dir, "tri.gltf").unwrap();
+    assert!(plain.file.light.intensity > 0.0 && plain.file.ambient > 0.0);
     std::fs::remove_dir_all(&dir).unwrap();
 }
 

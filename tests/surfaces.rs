@@ -127,6 +127,18 @@ fn double_sided_materials_show_their_back_and_one_sided_ones_do_not() {
     }
 }
 
+/// Every model under assets/models, in name order.
+fn shipped_models(dir: &std::path::Path) -> Vec<std::path::PathBuf> {
+    let mut files: Vec<_> = std::fs::read_dir(dir)
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.extension().is_some_and(|e| e == "glb"))
+        .collect();
+    files.sort();
+    assert!(files.len() >= 7, "{files:?}");
+    files
+}
+
 #[test]
 fn every_shipped_scene_renders_finite() {
     let mut r = renderer();
@@ -137,8 +149,8 @@ fn every_shipped_scene_renders_finite() {
         .collect();
     let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/models");
     let folder = Folder::open(&dir).unwrap();
-    for glb in ["lamps.glb", "media-bunnies.glb"] {
-        let s = Scene::load(&dir.join(glb), &folder).unwrap();
+    for glb in shipped_models(&dir) {
+        let s = Scene::load(&glb, &folder).unwrap();
         names.push(s.name().to_string());
         r.add_scene(s).unwrap();
     }

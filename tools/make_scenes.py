@@ -7,7 +7,7 @@ texture (a PNG embedded in the BIN chunk), KHR_materials_volume / transmission /
 diffuse_transmission / ior for translucent media, KHR_lights_punctual (directional, point,
 spot) and a perspective camera.
 
-    python3 tools/make_scenes.py   # rewrites assets/scenes/gallery.glb, assets/models/lamps.glb
+    python3 tools/make_scenes.py   # rewrites assets/scenes/gallery.glb and assets/models/*.glb
 
 Units are metres (glTF's); light intensities are lux (directional) and candela (point, spot).
 """
@@ -322,9 +322,7 @@ def bunny_scene(bunny, medium, to_light, light_colour):
     g.node({"mesh": g.mesh("bunny", bunny[0], bunny[1], m)})
     key = g.light({"type": "directional", "name": "back light", "color": light_colour, "intensity": 2.5})
     g.node({"light": key, "rotation": look_rotation(to_light, [0, 0, 0])})
-    g.doc["cameras"] = [{"type": "perspective", "perspective": {"yfov": math.radians(32), "znear": 0.01, "zfar": 1.0}}]
-    eye = [0.0, 0.07, 0.24]
-    g.node({"camera": 0, "translation": eye, "rotation": look_rotation(eye, [0.0, 0.046, 0.0])})
+    camera(g, [0.0, 0.07, 0.24], [0.0, 0.046, 0.0], 32, 1.0)
     return g
 
 
@@ -343,9 +341,84 @@ def materials_scene(bunny):
     g.node({"mesh": g.mesh("floor", pos, idx, plaster)})
     key = g.light({"type": "directional", "name": "key", "color": [1.0, 0.96, 0.9], "intensity": 1.0})
     g.node({"light": key, "rotation": look_rotation([0.55, 0.5, -0.67], [0, 0, 0])})
-    g.doc["cameras"] = [{"type": "perspective", "perspective": {"yfov": math.radians(36), "znear": 0.01, "zfar": 2.0}}]
-    eye = [0.0, 0.10, 0.38]
-    g.node({"camera": 0, "translation": eye, "rotation": look_rotation(eye, [0.0, 0.03, 0.0])})
+    camera(g, [0.0, 0.10, 0.38], [0.0, 0.03, 0.0], 36, 2.0)
+    return g
+
+
+def grid(corners, n):
+    """A parallelogram as an n × n grid of triangles, counter-clockwise seen from its front
+    (corners as in a scene file's quad): radiosity receives at mesh vertices, so a wall needs
+    a lattice of them to show the lamp's falloff and the colour bleeding."""
+    c0, c1, _, c3 = corners
+    pos, idx = [], []
+    for j in range(n + 1):
+        for i in range(n + 1):
+            pos.append(tuple(c0[k] + (c1[k] - c0[k]) * i / n + (c3[k] - c0[k]) * j / n
+                             for k in range(3)))
+    for j in range(n):
+        for i in range(n):
+            a, b = j * (n + 1) + i, (j + 1) * (n + 1) + i
+            idx += [a, a + 1, b + 1, a, b + 1, b]
+    return pos, idx
+
+
+def opaque_material(g, name, albedo, rough=0.5):
+    return g.material({"name": name, "pbrMetallicRoughness": {
+        "baseColorFactor": albedo + [1.0], "metallicFactor": 0.0, "roughnessFactor": rough}})
+
+
+def camera(g, eye, target, fov_deg, zfar):
+    g.doc["cameras"] = [{"type": "perspective", "perspective": {
+        "yfov": math.radians(fov_deg), "znear": 0.01, "zfar": zfar}}]
+    g.node({"camera": 0, "translation": eye, "rotation": look_rotation(eye, target)})
+
+
+def plaster_scene(bunny, with_floor):
+    """The built-in `bunny` (a plaster bunny) or, with its floor, `opaque`, as glTF: the scene
+    files' centimetres in metres, their key light as a directional light."""
+    g = Glb()
+    plaster = opaque_material(g, "plaster", [0.80, 0.76, 0.70])
+    g.node({"mesh": g.mesh("bunny", bunny[0], bunny[1], plaster)})
+    if with_floor:
+        pos, idx, _ = floor(0.4, 1)
+        g.node({"mesh": g.mesh("floor", pos, idx, opaque_material(g, "floor", [0.35, 0.36, 0.38]))})
+    key = g.light({"type": "directional", "name": "key", "color": [1.0, 0.96, 0.9], "intensity": 1.0})
+    g.node({"light": key, "rotation": look_rotation([-0.55, 0.75, 0.6], [0, 0, 0])})
+    if with_floor:
+        camera(g, [0.0, 0.09, 0.26], [0.0, 0.04, 0.0], 34, 1.0)
+    else:
+        camera(g, [0.0, 0.07, 0.24], [0.0, 0.046, 0.0], 32, 1.0)
+    return g
+
+
+def cornell_scene(bunny):
+    """The built-in `cornell` as glTF: five walls as 24 × 24 grids, the lamp an emissive
+    square (KHR_materials_emissive_strength: exitance 30), a marble bunny, no punctual light,
+    so Fovea lights it by radiosity from the lamp alone."""
+    g = Glb()
+    s = 0.01  # the scene file's units are centimetres
+    walls = [
+        ("white", [[-10, 0, -10], [-10, 0, 10], [10, 0, 10], [10, 0, -10]]),
+        ("white", [[-10, 20, -10], [10, 20, -10], [10, 20, 10], [-10, 20, 10]]),
+        ("white", [[-10, 0, -10], [10, 0, -10], [10, 20, -10], [-10, 20, -10]]),
+        ("red", [[-10, 0, -10], [-10, 20, -10], [-10, 20, 10], [-10, 0, 10]]),
+        ("green", [[10, 0, -10], [10, 0, 10], [10, 20, 10], [10, 20, -10]]),
+    ]
+    colours = {"white": [0.73, 0.73, 0.71], "red": [0.63, 0.065, 0.05], "green": [0.14, 0.45, 0.091]}
+    mats = {k: opaque_material(g, k, v) for k, v in colours.items()}
+    for k, (m, corners) in enumerate(walls):
+        pos, idx = grid([[c * s for c in p] for p in corners], 24)
+        g.node({"mesh": g.mesh("wall-%d-%s" % (k, m), pos, idx, mats[m])})
+    lamp = g.material({"name": "lamp", "emissiveFactor": [1.0, 0.95, 26.0 / 30.0],
+                       "pbrMetallicRoughness": {"baseColorFactor": [0.0, 0.0, 0.0, 1.0]}},
+                      {"KHR_materials_emissive_strength": {"emissiveStrength": 30.0}})
+    pos, idx = grid([[c * s for c in p] for p in
+                     [[-3, 19.95, -3], [3, 19.95, -3], [3, 19.95, 3], [-3, 19.95, 3]]], 4)
+    g.node({"mesh": g.mesh("lamp", pos, idx, lamp)})
+    marble = jensen_material(g, "marble")
+    g.node({"mesh": g.mesh("bunny", bunny[0], bunny[1], marble), "translation": [0.01, 0.0, -0.015],
+            "rotation": quat_y(20), "scale": [0.85] * 3})
+    camera(g, [0.0, 0.10, 0.48], [0.0, 0.095, 0.0], 32, 2.0)
     return g
 
 
@@ -366,3 +439,7 @@ if __name__ == "__main__":
         bunny_scene(cm, medium, [0.35, 0.45, -0.82], [1.0, 0.96, 0.9]).write(
             os.path.join(ROOT, "assets", "models", name + ".glb"))
     materials_scene(cm).write(os.path.join(ROOT, "assets", "models", "media-bunnies.glb"))
+    models = os.path.join(ROOT, "assets", "models")
+    plaster_scene(cm, False).write(os.path.join(models, "plaster-bunny.glb"))
+    plaster_scene(cm, True).write(os.path.join(models, "plaster-bunny-floor.glb"))
+    cornell_scene(cm).write(os.path.join(models, "cornell-box.glb"))

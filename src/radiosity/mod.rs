@@ -40,12 +40,14 @@ pub enum Surface {
         emission: Vec3,
     },
     /// A triangle mesh: one element per triangle, patches of about `triangles_per_patch`
-    /// neighbouring triangles; the output holds one value per mesh vertex.
+    /// neighbouring triangles; the output holds one value per mesh vertex. A mesh emits
+    /// (a glTF's emissive lamp) when `emission` is non-zero.
     Mesh {
         positions: Vec<Vec3>,
         normals: Vec<Vec3>,
         indices: Vec<u32>,
         reflectance: Vec3,
+        emission: Vec3,
         triangles_per_patch: usize,
     },
 }

@@ -6,6 +6,7 @@ use std::collections::HashMap;
 use glam::Vec3;
 
 mod build;
+use build::MeshSource;
 mod readout;
 
 use super::bvh::Bvh;
@@ -191,13 +192,17 @@ impl Solver {
                     normals,
                     indices,
                     reflectance,
+                    emission,
                     triangles_per_patch,
                 } => solver.add_mesh(
                     i,
-                    positions,
-                    normals,
-                    indices,
+                    MeshSource {
+                        positions,
+                        normals,
+                        indices,
+                    },
                     *reflectance,
+                    *emission,
                     *triangles_per_patch,
                 )?,
             }
@@ -317,10 +322,13 @@ impl Solver {
     fn element_factors(&self, p: usize, factors: &[f32]) -> Vec<(u32, f32)> {
         let patch = &self.patches[p];
         let cube = self.cube_for(p);
+        // Sampled a margin off the surface, as vertices are: on it, a point coplanar with the
+        // shooter sits on its facets' planes to within rounding, and the sign of that
+        // rounding decided whether it saw a whole hemisphere of them.
         let sampled = |pos: Vec3, normal: Vec3| {
-            let f = point_to_patch(pos, normal, &patch.facets);
-            let blocked =
-                f > 0.0 && self.blocked(cube.as_deref(), pos + normal * self.margin, patch.target);
+            let origin = pos + normal * self.margin;
+            let f = point_to_patch(origin, normal, &patch.facets);
+            let blocked = f > 0.0 && self.blocked(cube.as_deref(), origin, patch.target);
             if blocked {
                 0.0
             } else {
@@ -328,7 +336,12 @@ impl Solver {
             }
         };
         let mut out = Vec::new();
-        for q in &self.patches {
+        for (qi, q) in self.patches.iter().enumerate() {
+            // A patch does not light itself (flat, or a mesh cluster nearly so).
+            if qi == p {
+                out.extend(q.leaves.iter().map(|&e| (e, 0.0)));
+                continue;
+            }
             for &e in &q.leaves {
                 let el = &self.elements[e as usize];
                 let centre = &self.vertices[el.centre as usize];

@@ -281,6 +281,7 @@ impl Scene {
                                 .map(|i| i - p.first_vertex)
                                 .collect(),
                             reflectance: v3(m.albedo()),
+                            emission: v3(m.emission()),
                             triangles_per_patch: 16,
                         }
                     }

@@ -58,6 +58,10 @@ fn scene_of_loaded(
         message,
     };
     let (lo, hi) = bounds(&loaded);
+    let unlit = match &loaded {
+        Loaded::Gltf(g) => g.lights.is_empty(),
+        Loaded::Plain(_) => false,
+    };
     let (mut file, lights) = match &loaded {
         Loaded::Gltf(g) => {
             // glTF is in metres; its lights in lux and candela, scaled so the key light (or
@@ -136,7 +140,16 @@ fn scene_of_loaded(
         g.lights.clear();
     }
     let json = serde_json::to_string(&file).map_err(|e| fail(e.to_string()))?;
-    build::build_with(&json, at, Some((file_name.to_string(), loaded)))
+    let mut scene = build::build_with(&json, at, Some((file_name.to_string(), loaded)))?;
+    // A room lit only by its own emissive surfaces (a Cornell box as glTF): radiosity lights
+    // it, so no default sun shines through its walls and no sky fills it.
+    if unlit && scene.has_emitter() && super::plan::enclosure(&scene) >= super::plan::ENCLOSED {
+        scene.file.light.intensity = 0.0;
+        scene.file.ambient = 0.0;
+        scene.file.description =
+            format!("{name}, as loaded from its file: lit by its emissive surfaces");
+    }
+    Ok(scene)
 }
 
 use super::Scene;

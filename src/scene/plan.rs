@@ -121,6 +121,18 @@ pub fn radiosity_sun(scene: &Scene) -> Option<crate::radiosity::Sun> {
     })
 }
 
+/// The share of directions from the centre of the scene's bounds that meet a surface.
+pub fn enclosure(scene: &Scene) -> f64 {
+    let tris: Vec<[Vec3; 3]> = scene
+        .mesh
+        .indices
+        .chunks_exact(3)
+        .map(|t| [0, 1, 2].map(|k| scene.mesh.positions[t[k] as usize]))
+        .collect();
+    let (lo, hi) = scene.mesh.bounds();
+    crate::radiosity::enclosure(&tris, (lo + hi) / 2.0, 4.0 * (hi - lo).length())
+}
+
 /// Whether the scene needs radiosity, and why.
 fn radiosity(scene: &Scene) -> (bool, String) {
     use super::RadiosityMode;
@@ -149,14 +161,7 @@ fn radiosity(scene: &Scene) -> (bool, String) {
         RadiosityMode::On => return (true, "on (the scene file asks for it)".into()),
         RadiosityMode::Auto => {}
     }
-    let tris: Vec<[Vec3; 3]> = scene
-        .mesh
-        .indices
-        .chunks_exact(3)
-        .map(|t| [0, 1, 2].map(|k| scene.mesh.positions[t[k] as usize]))
-        .collect();
-    let (lo, hi) = scene.mesh.bounds();
-    let enclosed = crate::radiosity::enclosure(&tris, (lo + hi) / 2.0, 4.0 * (hi - lo).length());
+    let enclosed = enclosure(scene);
     if enclosed >= ENCLOSED {
         (
             true,

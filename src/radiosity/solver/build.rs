@@ -4,6 +4,13 @@ use glam::Vec3;
 
 use super::*;
 
+/// A mesh's geometry as the solver reads it.
+pub(super) struct MeshSource<'a> {
+    pub positions: &'a [Vec3],
+    pub normals: &'a [Vec3],
+    pub indices: &'a [u32],
+}
+
 impl Solver {
     pub(super) fn add_quad(
         &mut self,
@@ -118,13 +125,18 @@ impl Solver {
     pub(super) fn add_mesh(
         &mut self,
         index: usize,
-        positions: &[Vec3],
-        normals: &[Vec3],
-        indices: &[u32],
+        mesh: MeshSource,
         reflectance: Vec3,
+        emission: Vec3,
         per_patch: usize,
     ) -> Result<(), RadiosityError> {
-        check_values(index, reflectance, Vec3::ZERO)?;
+        check_values(index, reflectance, emission)?;
+        let MeshSource {
+            positions,
+            normals,
+            indices,
+        } = mesh;
+        let emitter = luminance(emission) > 0.0;
         if normals.len() != positions.len()
             || indices.iter().any(|&i| i as usize >= positions.len())
         {
@@ -183,9 +195,10 @@ impl Solver {
                     verts: [first + t[0], first + t[1], first + t[2], first + t[2]],
                     centre,
                     area: tri_area,
-                    reflectance,
+                    // As a quad lamp: an emitting mesh absorbs what reaches it.
+                    reflectance: if emitter { Vec3::ZERO } else { reflectance },
                     radiosity: Vec3::ZERO,
-                    unshot: Vec3::ZERO,
+                    unshot: emission,
                     cell: None,
                 });
                 facets.push(Facet {
@@ -197,6 +210,7 @@ impl Solver {
                 });
                 centroid += (a + b + c) / 3.0 * tri_area;
                 area += tri_area;
+                self.emitted += luminance(emission) * f64::from(tri_area);
             }
             if leaves.is_empty() {
                 continue;
@@ -219,7 +233,7 @@ impl Solver {
                 area,
                 target: best,
                 facets,
-                emitter: false,
+                emitter,
             });
         }
         Ok(())
