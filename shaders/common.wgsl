@@ -269,7 +269,15 @@ fn cube_face(d: vec3<f32>) -> u32 {
 // slope term is what keeps a floor lit at grazing light: across the PCF's ±2 texels its own
 // distance to the light changes by about 2 texels × the slope.
 fn punctual_shadow(atlas: texture_2d<f32>, li: PunctualLight, x: vec3<f32>, n: vec3<f32>) -> f32 {
-    if (li.shadow.x < 0.0 || has_mode(MODE_NO_SHADOWS)) {
+    if (has_mode(MODE_NO_SHADOWS)) {
+        return 1.0;
+    }
+    return punctual_shadow_map(atlas, li, x, n);
+}
+
+// The light's shadow tiles alone (the photon pass has no frame, and so no mode bits).
+fn punctual_shadow_map(atlas: texture_2d<f32>, li: PunctualLight, x: vec3<f32>, n: vec3<f32>) -> f32 {
+    if (li.shadow.x < 0.0) {
         return 1.0;
     }
     let pos = li.position_kind.xyz;
@@ -413,6 +421,8 @@ struct Photons {
     // are tested against it, side).
     shadow_view_proj: mat4x4<f32>,
     shadow_params: vec4<f32>,
+    // x: extra punctual lights whose light the photons carry (the scene's, at most 8).
+    extra: vec4<u32>,
 }
 
 // Depth under the gaze, from the G-buffer's normal + distance: what the eye focuses on. Off the

@@ -226,9 +226,10 @@ fn shade(p: vec2<i32>) {
             // The lobe reflects the sky and radiosity's irradiance alike (see the opaque case).
             let ambient = (m.albedo.rgb + e_o) * frame.light * sky + e_o * gi;
             let t_out = transmitted(m, dot(n, v));
-            // The interface's reflection of every light, and the extra lights' diffuse part.
-            let surface = key * max(cos_i, 0.0) * specular_lobe(m, f0, n, v, l)
-                + extra_lights(m, f0, m.albedo.rgb, n, v, x);
+            // The interface's reflection of the key light; the extra lights' reflection and
+            // diffuse part below (the photon rungs carry some of the latter).
+            let surface = key * max(cos_i, 0.0) * specular_lobe(m, f0, n, v, l);
+            var extra_diffuse = m.albedo.rgb;
             var body: vec3<f32>;
             if (rung == RUNG_OPAQUE) {
                 body = m.albedo.rgb * (key * max(cos_i, 0.0) * transmitted(m, cos_i) + gi) * t_out;
@@ -250,10 +251,13 @@ fn shade(p: vec2<i32>) {
                 } else {
                     g = gather_cut(x, m);
                 }
+                // The extra lights' diffuse part likewise: the photons carry what enters where
+                // they are (photons.wgsl), the rest enters locally.
                 let uncovered = clamp(vec3<f32>(1.0) - g.coverage, vec3<f32>(0.0), vec3<f32>(1.0));
                 body = (g.light + m.albedo.rgb * gi * uncovered) * t_out;
+                extra_diffuse = m.albedo.rgb * uncovered;
             }
-            rgb = body + ambient + surface;
+            rgb = body + ambient + surface + extra_lights(m, f0, extra_diffuse, n, v, x);
         }
     }
     out_color[index_of(p)] = vec4<f32>(rgb, 0.0);

@@ -64,15 +64,11 @@ impl SceneGpu {
             });
             maps.texture(name, map);
         }
-        let key_map = maps
-            .get_texture("shadow.depth")
-            .map(|(t, _)| t.clone())
-            .ok_or(GraphError::Missing {
-                pass: "shadow",
-                name: "shadow.depth",
-            })?;
+        // The photons test the key light's map and carry the extra lights' light.
+        maps.buffer("materials.scene", materials.clone());
+        maps.buffer("lights.scene", super::lights::upload(device, &scene));
         let photons = if scene.has_translucency() {
-            Some(photon_pass.create_map(device, pipelines, &materials, &key_map)?)
+            Some(photon_pass.create_map(device, pipelines, &maps)?)
         } else {
             None
         };
@@ -93,14 +89,12 @@ impl SceneGpu {
             }),
         };
         resources.buffer("photons.nodes", nodes);
-        resources.buffer("lights.scene", super::lights::upload(device, &scene));
         let (textures, linear_maps, samplers) = super::textures::upload(device, queue, &scene);
         resources.texture_array("materials.textures", textures);
         resources.texture_array("materials.linear_maps", linear_maps);
         for (name, sampler) in super::textures::SAMPLERS.into_iter().zip(samplers) {
             resources.sampler(name, sampler);
         }
-        resources.buffer("materials.scene", materials);
         tracing::info!(scene = %scene.name(), triangles = scene.mesh.triangle_count(), translucent = scene.has_translucency(), "scene loaded");
         let radiosity = start_radiosity(&scene);
         Ok(SceneGpu {

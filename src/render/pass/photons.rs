@@ -8,7 +8,9 @@ use glam::{Mat4, Vec3};
 use super::gbuffer::{mesh_pipeline, MeshBuffers, IRRADIANCE};
 use super::pyramid;
 use crate::render::gpu;
-use crate::render::graph::{read, uniform, GraphError, PassDecl, Pipelines, Resources, Routes};
+use crate::render::graph::{
+    read, texture, uniform, GraphError, PassDecl, Pipelines, Resources, Routes,
+};
 use crate::render::timer::PassTimer;
 use crate::scene::Scene;
 
@@ -25,7 +27,12 @@ pub const PASS: PassDecl = PassDecl {
     shader: include_str!("../../../shaders/photons.wgsl"),
     // Binding 0 is the frame uniform of the shared prelude, which the photon pass never uses.
     first_binding: 1,
-    bindings: &[uniform("photons.uniform"), read("materials.scene")],
+    bindings: &[
+        uniform("photons.uniform"),
+        read("materials.scene"),
+        read("lights.scene"),
+        texture("shadow.atlas"),
+    ],
     attachments: &[
         "photons.position",
         "photons.normal",
@@ -46,6 +53,8 @@ struct PhotonUniform {
     /// photons test it, side), as in the frame uniform.
     shadow_view_proj: [[f32; 4]; 4],
     shadow_params: [f32; 4],
+    /// x: the extra punctual lights the photons carry.
+    extra: [u32; 4],
 }
 
 pub fn node_count() -> u64 {
@@ -107,12 +116,13 @@ impl PhotonPass {
     }
 
     /// Allocates a scene's photon map; `materials` must mark every translucent material.
+    /// `shared` holds the scene's `materials.scene`, `lights.scene`, and its shadow maps
+    /// (`shadow.depth`, `shadow.atlas`).
     pub fn create_map(
         &self,
         device: &wgpu::Device,
         pipelines: &mut Pipelines,
-        materials: &wgpu::Buffer,
-        shadow: &wgpu::Texture,
+        shared: &Resources,
     ) -> Result<PhotonMap, GraphError> {
         use wgpu::BufferUsages as B;
         use wgpu::TextureFormat as F;
@@ -155,8 +165,7 @@ impl PhotonPass {
             "pyramid.levels",
             buffer("pyramid.levels", levels, B::UNIFORM | B::COPY_DST),
         );
-        r.buffer("materials.scene", materials.clone());
-        r.texture("shadow.depth", shadow.clone());
+        r.extend(shared);
         let routes = Routes::default();
         let raster_bind = r.bind(device, &pipelines.layout(&PASS), &PASS, &routes)?;
         let pyramid_bind = r.bind(
@@ -279,6 +288,7 @@ fn photon_uniform(scene: &Scene, inputs: PhotonInputs) -> PhotonUniform {
             f32::from(u8::from(inputs.shadowed)),
             shadow.params[3],
         ],
+        extra: [scene.file.lights.len() as u32, 0, 0, 0],
     }
 }
 
