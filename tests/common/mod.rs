@@ -6,6 +6,7 @@
 
 pub mod frames;
 pub mod images;
+pub mod radiosity;
 
 use std::net::SocketAddr;
 use std::time::Duration;
