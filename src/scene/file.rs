@@ -35,7 +35,8 @@ impl Light {
 }
 
 /// Lights beyond the key light (`SceneFile::lights`): they light surfaces directly (diffuse and
-/// specular); shadows and the subsurface photons come from the key light only.
+/// specular), spot and point lights with shadows from the atlas; the subsurface photons, which
+/// lie where the key light sees a translucent body, carry their light into it.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(tag = "kind", rename_all = "snake_case", deny_unknown_fields)]
 pub enum LightSpec {

@@ -319,9 +319,9 @@ impl fmt::Display for Plan {
         writeln!(f, "  shadows: {}", self.shadow_reason)?;
         let [d, p, s] = self.extra_lights;
         if d + p + s == 0 {
-            writeln!(f, "  extra lights: none (the key light alone)")?;
+            writeln!(f, "  extra lights: none")?;
         } else {
-            writeln!(f, "  extra lights: {d} directional, {p} point, {s} spot: diffuse + specular; spot and point lights shadowed while the atlas has room (see shadows), directional ones not; translucency's photons come from the key light only")?;
+            writeln!(f, "  extra lights: {d} directional, {p} point, {s} spot: diffuse + specular; spot and point lights shadowed while the atlas has room (see shadows), directional ones not; translucent bodies take their light through the photons (which lie where the key light sees them) and locally elsewhere")?;
         }
         writeln!(f, "  radiosity: {}", self.radiosity_reason)
     }
