@@ -68,16 +68,20 @@ fn level_side(level: u32) -> u32 {
 // CPU twin: optics::dipole::softened_distance.
 fn cluster_distance_mm(node: PhotonNode, x_o: vec3<f32>) -> f32 {
     let r = distance(node.pos_extent.xyz, x_o) * frame.mm_per_unit;
-    let soft = frame.photon_radius_mm; // set per frame: the photon radius in mm
+    let soft = PHOTON_SOFTENING * frame.photon_radius_mm;
     return sqrt(r * r + soft * soft);
 }
+
+// R_d is softened over this many photon radii: a kernel narrower than the photons' spacing
+// sums to dots at the photons (CPU twin: optics::dipole::PHOTON_SOFTENING).
+const PHOTON_SOFTENING: f32 = 1.77245385;
 
 // A single photon's softening radius (mm): its texel's footprint stretched by the surface's
 // slant under the light (CPU twin: optics::dipole::leaf_softening).
 fn leaf_softening_mm(node: PhotonNode) -> f32 {
     let radius = frame.photon_radius_mm;
     let extent_mm = node.pos_extent.w * frame.mm_per_unit;
-    return max(sqrt(radius * extent_mm / (0.70710678 * 1.77245385)), radius);
+    return PHOTON_SOFTENING * max(sqrt(radius * extent_mm / (0.70710678 * 1.77245385)), radius);
 }
 
 // One photon's R_d at x_o, softened by its own footprint and scaled back to its full energy.
@@ -140,7 +144,7 @@ fn gather_cut(x_o: vec3<f32>, m: Material) -> Gathered {
     let eps = frame.cut_epsilon;
     let roots = level_side(start) * level_side(start);
     // Every cluster is softened by the same photon radius: one gain for all of them.
-    let cluster_gain = softening_gain(m, frame.photon_radius_mm);
+    let cluster_gain = softening_gain(m, PHOTON_SOFTENING * frame.photon_radius_mm);
     var sum = vec3<f32>(0.0);
     var rd_area = vec3<f32>(0.0);
     var stack: array<vec2<u32>, 32>;
