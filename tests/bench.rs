@@ -185,3 +185,44 @@ fn against_ground_truth_compares_the_reference_rung_and_every_configuration() {
     assert!(GroundTruth::load(&dir.join("missing.png")).is_err());
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+#[test]
+fn the_bench_runs_a_model_file_as_well_as_a_built_in_scene() {
+    let dir = std::env::temp_dir().join(format!("fovea-bench-model-{}", std::process::id()));
+    let model = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/assets/models/plaster-bunny.glb"
+    );
+    let run = |scene: &str| {
+        std::process::Command::new(env!("CARGO_BIN_EXE_fovea"))
+            .args([
+                "bench", "--sweep", "presets", "--frames", "1", "--warmup", "0",
+            ])
+            .args([
+                "--size", "64x48", "--gaze", "0.5,0.5", "--scene", scene, "--out",
+            ])
+            .arg(&dir)
+            .env("NODEVICE_SELECT", "1")
+            .env_remove("RUST_BACKTRACE")
+            .output()
+            .unwrap()
+    };
+    let out = run(&format!("bunny,{model}"));
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let md = std::fs::read_to_string(dir.join("bench.md")).unwrap();
+    assert!(
+        md.contains("## bunny 64×48") && md.contains("## plaster-bunny 64×48"),
+        "{md}"
+    );
+    let out = run("no-such-scene");
+    let e = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        !out.status.success() && e.contains("neither a built-in scene (gallery"),
+        "{e}"
+    );
+    std::fs::remove_dir_all(&dir).ok();
+}

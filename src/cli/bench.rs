@@ -11,8 +11,9 @@ use fovea::render::Renderer;
 
 #[derive(clap::Args)]
 pub struct BenchArgs {
-    /// Scenes, comma-separated (built-in: gallery, bunny-marble, bunny-skin, materials, opaque,
-    /// bunny, cornell).
+    /// Scenes, comma-separated: built-in ones by name (gallery, bunny-marble, bunny-skin,
+    /// materials, opaque, bunny, cornell) or scene and model files by path (.json, .gltf, .glb,
+    /// .ply, .obj), named in the report by their file's stem.
     #[arg(long, default_value = fovea::scene::DEFAULT_SCENE)]
     pub scene: String,
     /// Frame sizes WxH, comma-separated.
@@ -90,10 +91,7 @@ pub fn bench(a: BenchArgs) -> Result<()> {
         .map(parse_gaze)
         .collect::<Result<Vec<_>, _>>()
         .map_err(anyhow::Error::msg)?;
-    let scenes: Vec<String> = a.scene.split(',').map(|s| s.trim().to_string()).collect();
-    for s in &scenes {
-        fovea::scene::Scene::builtin(s)?;
-    }
+    let (scenes, own) = bench_scenes(&a.scene)?;
     let against = a
         .against
         .as_deref()
@@ -127,6 +125,9 @@ pub fn bench(a: BenchArgs) -> Result<()> {
         against,
     };
     let report = with_renderer(|renderer, stop, progress| {
+        for scene in own {
+            renderer.add_scene(scene)?;
+        }
         Ok(fovea::bench::run(renderer, &opts, stop, progress)?)
     })?;
     fovea::bench::write_reports(&report, &a.out)
@@ -188,4 +189,34 @@ pub(super) fn with_renderer<R>(
     let out = sweep(&mut renderer, &stop, &mut progress);
     eprintln!();
     out
+}
+
+/// The scenes `--scene` names: built-in ones as they are; anything else a scene or model file,
+/// loaded here (its name is its file's stem, which must not shadow a built-in scene).
+fn bench_scenes(list: &str) -> Result<(Vec<String>, Vec<fovea::scene::Scene>)> {
+    let builtin = fovea::scene::builtin_names();
+    let (mut names, mut own) = (Vec::new(), Vec::new());
+    for item in list.split(',').map(str::trim) {
+        if builtin.contains(&item) {
+            names.push(item.to_string());
+            continue;
+        }
+        let path = std::path::Path::new(item);
+        if !path.exists() {
+            anyhow::bail!(
+                "--scene {item}: neither a built-in scene ({}) nor a scene or model file",
+                builtin.join(", ")
+            );
+        }
+        let scene = super::scenes::load_own_scene(path)?;
+        let name = scene.name().to_string();
+        if builtin.contains(&name.as_str()) || names.contains(&name) {
+            anyhow::bail!(
+                "{item}: its scene is named {name:?}, which another scene of this run has; rename the file"
+            );
+        }
+        names.push(name);
+        own.push(scene);
+    }
+    Ok((names, own))
 }
