@@ -7,31 +7,26 @@ use common::radiosity::{grid_mesh, opposed_rectangles, quad, serial};
 use fovea::radiosity::{Solver, Surface};
 use glam::Vec3;
 
-/// A square of side `side` centred over `base` at height `side` above it, facing down, as a
-/// triangle mesh of n × n cells: a glTF lamp.
+/// A square of side `side` centred over `base` at height `side` above it, facing down
+/// (X × Z = −Y), as a triangle mesh of n × n cells shooting 16 triangles at a time: a glTF lamp.
 fn emitting_mesh(n: u32, emission: f32, side: f32, base: Vec3) -> Surface {
-    let mut positions = Vec::new();
-    for j in 0..=n {
-        for i in 0..=n {
-            let (x, z) = (i as f32 / n as f32 - 0.5, j as f32 / n as f32 - 0.5);
-            positions.push(base + Vec3::new(x, 1.0, z) * side);
-        }
-    }
-    let mut indices = Vec::new();
-    for j in 0..n {
-        for i in 0..n {
-            let (a, b) = (j * (n + 1) + i, (j + 1) * (n + 1) + i);
-            // (x, z) winding seen from below: the face normal is −Y.
-            indices.extend([a, a + 1, b + 1, a, b + 1, b]);
-        }
-    }
-    Surface::Mesh {
-        normals: vec![-Vec3::Y; positions.len()],
-        positions,
-        indices,
-        reflectance: Vec3::splat(0.8),
-        emission: Vec3::splat(emission),
-        triangles_per_patch: 16,
+    let corner = base + Vec3::new(-0.5, 1.0, -0.5) * side;
+    match grid_mesh(corner, Vec3::X * side, Vec3::Z * side, n, 0.8) {
+        Surface::Mesh {
+            positions,
+            normals,
+            indices,
+            reflectance,
+            ..
+        } => Surface::Mesh {
+            positions,
+            normals,
+            indices,
+            reflectance,
+            emission: Vec3::splat(emission),
+            triangles_per_patch: 16,
+        },
+        quad => quad,
     }
 }
 
