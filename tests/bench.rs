@@ -83,6 +83,17 @@ fn a_tiny_sweep_writes_json_markdown_and_svg() {
 
     let md = std::fs::read_to_string(dir.join("bench.md")).unwrap();
     assert!(md.contains("| ") && md.contains("full") && md.contains("fast") && md.contains("FLIP"));
+    // The per-pass table: a column per configuration, the foveated passes only under `fast`,
+    // frame order (G-buffer before sampling before shading).
+    let passes = &md[md.find("## Per pass").expect("per-pass section")..];
+    assert!(passes.contains("| pass (ms) | full | fast |"), "{passes}");
+    let sampling = passes
+        .lines()
+        .find(|l| l.starts_with("| sampling |"))
+        .unwrap();
+    assert!(sampling.starts_with("| sampling | – | "), "{sampling}");
+    let at = |p: &str| passes.find(&format!("| {p} |")).unwrap();
+    assert!(at("gbuffer") < at("sampling") && at("sampling") < at("shade"));
     let svg = std::fs::read_to_string(dir.join("bench.svg")).unwrap();
     assert!(
         svg.starts_with("<svg")

@@ -253,6 +253,7 @@ impl BenchReport {
             ));
         }
         s.push_str(&self.distance_to_ideal());
+        s.push_str(&self.per_pass());
         if let Some(file) = &self.ground_truth {
             s.push_str(&format!(
                 "\n## Against physical ground truth `{file}`\n\nMedians over the measured frames; the model's own reference first.\n\n| group | configuration | PSNR dB | SSIM | FLIP | FLIP pooled | FLIP 5° |\n|---|---|---:|---:|---:|---:|---:|\n"
@@ -327,6 +328,95 @@ impl BenchReport {
                 100.0 * r.sampled, r.overhead_ms, 100.0 * r.overhead_ms / full_ms,
                 achieved, ideal, 100.0 * achieved / ideal,
             ));
+        }
+        s
+    }
+}
+
+/// Frame order of the passes a frame records (`render/frame.rs`), for the per-pass tables;
+/// a pass not named here sorts after them.
+const PASS_ORDER: [&str; 13] = [
+    "shadow",
+    "photons",
+    "pyramid",
+    "gbuffer",
+    "sampling",
+    "compact",
+    "jfa",
+    "resolve",
+    "pull_push",
+    "shade",
+    "screen_diffusion",
+    "dof",
+    "output",
+];
+
+impl BenchReport {
+    /// Per group: every pass's median GPU ms under each configuration, the frame, and the
+    /// overhead beside the ideal, so a change to one pass is measured on that pass.
+    fn per_pass(&self) -> String {
+        let mut groups: Vec<(GroupKey, Vec<&BenchRecord>)> = Vec::new();
+        for r in &self.records {
+            let key = group_of(r);
+            match groups.iter_mut().find(|(k, _)| *k == key) {
+                Some((_, rows)) => rows.push(r),
+                None => groups.push((key, vec![r])),
+            }
+        }
+        let mut s = String::from("\n## Per pass: GPU ms (medians)\n\n*Overhead* is what foveation adds (sampling, compaction, reconstruction) as a share of `full`'s frame; *ideal* is 1 / shaded.\n");
+        for (_, rows) in groups {
+            let r0 = rows[0];
+            let mut passes: Vec<&String> = rows.iter().flat_map(|r| r.passes_ms.keys()).collect();
+            let rank = |p: &str| {
+                PASS_ORDER
+                    .iter()
+                    .position(|q| *q == p)
+                    .unwrap_or(PASS_ORDER.len())
+            };
+            passes.sort_by(|a, b| rank(a).cmp(&rank(b)).then(a.cmp(b)));
+            passes.dedup();
+            s.push_str(&format!(
+                "\n### {} {}×{}, gaze ({:.2}, {:.2})\n\n| pass (ms) |",
+                r0.scene, r0.width, r0.height, r0.gaze[0], r0.gaze[1]
+            ));
+            for r in &rows {
+                s.push_str(&format!(" {} |", r.config));
+            }
+            s.push_str(&format!("\n|---|{}\n", "---:|".repeat(rows.len())));
+            let line = |s: &mut String, name: &str, cell: &dyn Fn(&BenchRecord) -> String| {
+                s.push_str(&format!("| {name} |"));
+                for r in &rows {
+                    s.push_str(&format!(" {} |", cell(r)));
+                }
+                s.push('\n');
+            };
+            for p in passes {
+                line(&mut s, p, &|r| {
+                    r.passes_ms.get(p).map_or("–".into(), |v| format!("{v:.1}"))
+                });
+            }
+            line(&mut s, "**frame**", &|r| {
+                format!("**{:.0}**", r.frame_ms.median)
+            });
+            line(&mut s, "shaded", &|r| format!("{:.1}%", 100.0 * r.sampled));
+            line(&mut s, "vs full (achieved / ideal)", &|r| match (
+                r.speedup_vs_full,
+                r.ideal_vs_full,
+            ) {
+                (Some(a), Some(i)) => format!("{a:.2}× / {i:.1}×"),
+                (Some(a), None) => format!("{a:.2}×"),
+                _ => "–".into(),
+            });
+            line(
+                &mut s,
+                "overhead / full frame",
+                &|r| match r.speedup_vs_full {
+                    Some(a) if r.overhead_ms > 0.0 => {
+                        format!("{:.0}%", 100.0 * r.overhead_ms / (r.frame_ms.median * a))
+                    }
+                    _ => "–".into(),
+                },
+            );
         }
         s
     }
