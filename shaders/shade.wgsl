@@ -30,6 +30,9 @@
 @group(0) @binding(12) var shadow_tex: texture_2d<f32>;
 @group(0) @binding(13) var<storage, read> lights: array<PunctualLight>;
 @group(0) @binding(14) var light_shadows: texture_2d<f32>;
+// The coarse lattice's gathers (MODE_COARSE_GATHER): per sample the light with w = 1 where
+// one was gathered, then the coverage.
+@group(0) @binding(15) var<storage, read_write> coarse: array<vec4<f32>>;
 
 // Diffuse `diffuse` and specular light from every extra punctual light (spot and point lights
 // with shadow tiles are shadowed).
@@ -75,6 +78,12 @@ fn cluster_distance_mm(node: PhotonNode, x_o: vec3<f32>) -> f32 {
 // R_d is softened over this many photon radii: a kernel narrower than the photons' spacing
 // sums to dots at the photons (CPU twin: optics::dipole::PHOTON_SOFTENING).
 const PHOTON_SOFTENING: f32 = 1.77245385;
+// Normals closer than ~25° count as one smooth patch for the coarse gather (CPU twin:
+// optics::coarse_gather::COHERENT_COS).
+const COHERENT_COS: f32 = 0.9;
+// How far a lattice point may lie from the pixel's surface point, in softening lengths
+// (CPU twin: optics::coarse_gather::REACH_OF_SOFTENING).
+const REACH_OF_SOFTENING: f32 = 0.5;
 
 // A single photon's softening radius (mm): its texel's footprint stretched by the surface's
 // slant under the light (CPU twin: optics::dipole::leaf_softening).
@@ -185,6 +194,112 @@ fn gather_cut(x_o: vec3<f32>, m: Material) -> Gathered {
     return gathered(m, sum, rd_area);
 }
 
+// The rung a material is shaded on this frame: opaque without subsurface light, or before
+// the photon pyramid is ready for the photon rungs.
+fn rung_for(m: Material) -> u32 {
+    if (m.subsurface == 0u || (frame.rung >= RUNG_HIERARCHICAL && frame.pyramid_ready == 0u)) {
+        return RUNG_OPAQUE;
+    }
+    return frame.rung;
+}
+
+// A photon rung's gather at x, per pixel.
+fn gather_at(x: vec3<f32>, m: Material, rung: u32) -> Gathered {
+    if (rung == RUNG_BRUTE_FORCE) {
+        return gather_all(x, m);
+    }
+    return gather_cut(x, m);
+}
+
+// Seed 000's screen-space hierarchy on the photon gathers. The gather is a function of the
+// surface point alone, Σ R_d(|x_c − x|) Φ_c, smooth over the photons' softening length, so
+// where the pixels of a 2×2 block lie on one smooth patch of one material it is gathered at
+// the lattice point (2i, 2j) and interpolated between lattice points; elsewhere (silhouettes,
+// creases, material edges, a lattice point on another surface) the pixel gathers itself.
+// CPU twin of the coherence test: `optics::coarse_gather`.
+
+fn coarse_width() -> i32 {
+    return (i32(frame.width) + 1) / 2;
+}
+
+// Where pixel `q` sees the surface, and its material id (−1 where it sees none).
+fn surface_at(q: vec2<i32>) -> vec4<f32> {
+    let a = textureLoad(albedo_tex, q, 0);
+    if (a.a <= 0.0) {
+        return vec4<f32>(0.0, 0.0, 0.0, -1.0);
+    }
+    let nd = textureLoad(normal_distance, q, 0);
+    return vec4<f32>(frame.eye + view_ray(vec2<f32>(q) + 0.5) * nd.w, f32(material_id(a.a)));
+}
+
+@compute @workgroup_size(8, 8)
+fn gather_coarse(@builtin(global_invocation_id) id: vec3<u32>) {
+    // Lattice rows for the pixel rows shade_rows.x.. (see shade::coarse_dispatch).
+    let c = vec2<i32>(id.xy) + vec2<i32>(0, i32(frame.shade_rows.x / 2u));
+    let last = min(i32((max(frame.shade_rows.y, 1u) - 1u) / 2u) + 1, (i32(frame.height) + 1) / 2 - 1);
+    if (c.x >= coarse_width() || c.y > last) {
+        return;
+    }
+    let k = 2u * u32(c.y * coarse_width() + c.x);
+    coarse[k] = vec4<f32>(0.0);
+    coarse[k + 1u] = vec4<f32>(0.0);
+    let q = 2 * c;
+    let a = textureLoad(albedo_tex, q, 0);
+    if (a.a <= 0.0) {
+        return;
+    }
+    let m = materials[material_id(a.a)];
+    let rung = rung_for(m);
+    if (m.kind == 0u || m.kind == 2u || rung < RUNG_HIERARCHICAL) {
+        return;
+    }
+    let g = gather_at(surface_at(q).xyz, m, rung);
+    coarse[k] = vec4<f32>(g.light, 1.0);
+    coarse[k + 1u] = vec4<f32>(g.coverage, 0.0);
+}
+
+// The gather at pixel p (surface point x, normal n, material `id`) from the lattice, when
+// every lattice point it interpolates from was gathered on the same material within the
+// photons' softening length (× REACH_OF_SOFTENING) of x with a normal within ~25° of n;
+// `ok` false otherwise.
+struct Interpolated {
+    g: Gathered,
+    ok: bool,
+}
+
+fn interpolated(p: vec2<i32>, x: vec3<f32>, n: vec3<f32>, id: u32) -> Interpolated {
+    var out = Interpolated(Gathered(vec3<f32>(0.0), vec3<f32>(0.0)), false);
+    let base = p / 2;
+    let odd = p - 2 * base;
+    // Bilinear on the lattice: a pixel between two lattice points weighs each ½, one inside a
+    // cell each of four ¼; a pixel on a lattice point is that point's own gather.
+    let w = select(1.0, 0.5, odd.x == 1) * select(1.0, 0.5, odd.y == 1);
+    // Lattice points within half the photons' softening length of x: the gather changes
+    // little over that, so a straight blend misses by ~2% at worst (tests/coarse_gather.rs).
+    let reach = max(REACH_OF_SOFTENING * PHOTON_SOFTENING * frame.photon_radius_mm / frame.mm_per_unit, 1e-12);
+    for (var j = 0; j < 4; j++) {
+        let o = vec2<i32>(j & 1, j >> 1);
+        if (o.x > odd.x || o.y > odd.y) {
+            continue;
+        }
+        let c = base + o;
+        if (2 * c.x >= i32(frame.width) || 2 * c.y >= i32(frame.height)) {
+            return out;
+        }
+        let k = 2u * u32(c.y * coarse_width() + c.x);
+        let light = coarse[k];
+        let s = surface_at(2 * c);
+        let nq = textureLoad(normal_distance, 2 * c, 0).xyz;
+        if (light.w == 0.0 || s.w != f32(id) || distance(s.xyz, x) > reach || dot(nq, n) < COHERENT_COS) {
+            return out;
+        }
+        out.g.light += w * light.rgb;
+        out.g.coverage += w * coarse[k + 1u].rgb;
+    }
+    out.ok = true;
+    return out;
+}
+
 fn shade(p: vec2<i32>) {
     let a = textureLoad(albedo_tex, p, 0);
     var rgb = frame.background;
@@ -203,10 +318,7 @@ fn shade(p: vec2<i32>) {
         let irr = textureLoad(irradiance_tex, p, 0);
         let gi = irr.rgb;
         let sky = frame.ambient * irr.a;
-        var rung = frame.rung;
-        if (m.subsurface == 0u || (rung >= RUNG_HIERARCHICAL && frame.pyramid_ready == 0u)) {
-            rung = RUNG_OPAQUE;
-        }
+        let rung = rung_for(m);
         if (m.kind == 2u) {
             // An area light shows its own exitance.
             rgb = m.albedo.rgb;
@@ -250,10 +362,14 @@ fn shade(p: vec2<i32>) {
                 // bounce onto an object's underside) enters locally, through the total diffuse
                 // reflectance as on the opaque rung, so the two meet without a seam.
                 var g: Gathered;
-                if (rung == RUNG_BRUTE_FORCE) {
-                    g = gather_all(x, m);
-                } else {
-                    g = gather_cut(x, m);
+                var from_lattice = false;
+                if (has_mode(MODE_COARSE_GATHER)) {
+                    let i = interpolated(p, x, n, material_id(a.a));
+                    g = i.g;
+                    from_lattice = i.ok;
+                }
+                if (!from_lattice) {
+                    g = gather_at(x, m, rung);
                 }
                 // The extra lights' diffuse part likewise: the photons carry what enters where
                 // they are (photons.wgsl), the rest enters locally.

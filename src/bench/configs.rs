@@ -76,6 +76,11 @@ pub fn sweep(which: &str) -> Result<Vec<BenchConfig>, String> {
             |s| s.translucency.cut_epsilon = eps,
         ));
     }
+    rungs.push(BenchConfig::variant_of(
+        "full",
+        "full coarse-gather".into(),
+        |s| s.translucency.coarse_gather = true,
+    ));
     let mut knobs = presets.clone();
     knobs.extend(rungs.iter().cloned());
     // What the surface model costs: the key light's shadows and the specular lobe, each off.

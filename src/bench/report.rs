@@ -407,6 +407,11 @@ impl BenchReport {
                 (Some(a), None) => format!("{a:.2}×"),
                 _ => "–".into(),
             });
+            line(&mut s, "PSNR / FLIP 5° vs full", &|r| {
+                r.vs_full.as_ref().map_or("–".into(), |e| {
+                    format!("{:.1} dB / {:.4}", e.psnr, e.flip_fovea)
+                })
+            });
             line(
                 &mut s,
                 "overhead / full frame",

@@ -163,9 +163,11 @@ pub fn run(
                 frames[ci] = Some(frame.rgba);
             }
             let full = opts.configs.iter().position(|c| c.name == "full");
-            if let Some(Some(full_rgba)) = full.map(|i| &frames[i]) {
-                for (ci, config) in opts.configs.iter().enumerate() {
-                    if let (Some(rgba), true) = (&frames[ci], config.settings.foveation.enabled) {
+            // Every other configuration against `full`'s render of the same frame: what
+            // foveation, or a cheaper gather, costs apart from the shading model's own error.
+            if let (Some(fi), Some(Some(full_rgba))) = (full, full.map(|i| &frames[i])) {
+                for ci in 0..opts.configs.len() {
+                    if let (Some(rgba), false) = (&frames[ci], ci == fi) {
                         samples[ci].vs_full.push(quality::measure(
                             full_rgba, rgba, *w, *h, &viewing, gaze_px, &weights,
                         ));

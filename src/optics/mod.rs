@@ -2,6 +2,7 @@
 //! written plainly so tests can hold the GPU to it.
 
 pub mod acuity;
+pub mod coarse_gather;
 pub mod color;
 pub mod dipole;
 pub mod lights;

@@ -59,8 +59,11 @@ impl Gpu {
                 // The G-buffer writes four targets (normal + distance, albedo, blurred normal,
                 // radiosity irradiance): 40 bytes per pixel by WebGPU's accounting, over the
                 // default 32. Every desktop Vulkan, Metal and D3D12 adapter allows 64 or more.
+                // The shading pass binds nine storage buffers (one over WebGPU's default of
+                // eight: the coarse gather's lattice); Vulkan, Metal and D3D12 allow 16 or more.
                 required_limits: wgpu::Limits {
                     max_color_attachment_bytes_per_sample: 40,
+                    max_storage_buffers_per_shader_stage: 9,
                     ..wgpu::Limits::default()
                 },
                 ..Default::default()

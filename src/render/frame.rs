@@ -51,6 +51,8 @@ pub struct FramePlan {
     pub jfa_steps: Vec<u32>,
     /// Convert the output to I420 planes for the readback (H.264 sessions, even sizes).
     pub i420: bool,
+    /// Gather the photons on the coarse lattice before shading a whole frame on a photon rung.
+    pub coarse_gather: bool,
 }
 
 impl FramePlan {
@@ -68,6 +70,10 @@ impl FramePlan {
                 Vec::new()
             },
             i420: false,
+            coarse_gather: s.translucency.coarse_gather
+                && !fov.enabled
+                && needs_dipole
+                && matches!(s.translucency.rung, Rung::Hierarchical | Rung::BruteForce),
         }
     }
 }
@@ -83,7 +89,7 @@ pub fn record(f: &mut Recorder, plan: &FramePlan, mesh: &MeshBuffers) -> Result<
         if plan.compaction {
             shade::record_list(f)?;
         } else {
-            shade::record_grid(f)?;
+            shade::record_grid(f, false)?;
         }
         if plan.pull_push {
             pull_push::record(f)?;
@@ -92,7 +98,7 @@ pub fn record(f: &mut Recorder, plan: &FramePlan, mesh: &MeshBuffers) -> Result<
             resolve::record(f)?;
         }
     } else {
-        shade::record_grid(f)?;
+        shade::record_grid(f, plan.coarse_gather)?;
     }
     record_suffix(f, plan)
 }

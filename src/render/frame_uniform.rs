@@ -41,6 +41,10 @@ fn mode_bits(s: &crate::settings::RenderSettings) -> u32 {
             fov.reconstruction == Reconstruction::PullPush,
             MODE_DEMODULATED,
         ),
+        (
+            s.translucency.coarse_gather && !fov.enabled,
+            MODE_COARSE_GATHER,
+        ),
         (s.dof, MODE_DOF),
         (!s.indirect, MODE_DIRECT_ONLY),
         (!s.shadows, MODE_NO_SHADOWS),

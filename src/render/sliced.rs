@@ -230,7 +230,7 @@ impl Renderer {
         match part {
             Part::Whole => frame::record(&mut recorder, &plan, &sg.mesh)?,
             Part::Prefix => frame::record_prefix(&mut recorder, &plan, &sg.mesh)?,
-            Part::Rows(a, b) => shade::record_rows(&mut recorder, a, b)?,
+            Part::Rows(a, b) => shade::record_rows(&mut recorder, a, b, plan.coarse_gather)?,
             Part::Suffix => frame::record_suffix(&mut recorder, &plan)?,
         }
         t.routes = recorder.routes;

@@ -6,7 +6,7 @@
 use std::collections::HashMap;
 
 use super::graph::{BindKey, Resources, Routes};
-use super::pass::{gbuffer, i420, jfa, pull_push};
+use super::pass::{gbuffer, i420, jfa, pull_push, shade};
 use super::uniforms::FrameUniform;
 use super::RenderError;
 use crate::foveation::reconstruct::jfa_steps;
@@ -129,6 +129,11 @@ impl FrameTargets {
                 pull_push::levels_bytes(width, height),
                 B::UNIFORM | B::COPY_DST,
             ),
+            (
+                "shade.coarse",
+                shade::coarse_bytes(width, height),
+                B::STORAGE,
+            ),
         ] {
             r.buffer(name, buffer(name, bytes, usage));
         }
@@ -167,6 +172,7 @@ impl FrameTargets {
             + 4;
         u64::from(width) * u64::from(height) * per_pixel
             + pull_push::cells_bytes(width, height)
+            + shade::coarse_bytes(width, height)
             + 2 * 4 * i420::words(width, height)
     }
 

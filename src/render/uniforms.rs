@@ -27,6 +27,8 @@ pub const MODE_NO_SPECULAR: u32 = 512;
 pub const MODE_DEMODULATED: u32 = 1024;
 /// Saliency raises the probability to S·√p rather than S (edges sampled at the MAR along them).
 pub const MODE_EDGES_AT_MAR: u32 = 2048;
+/// The photon rungs gather on the coarse lattice and interpolate (`shade.wgsl`, `gather_coarse`).
+pub const MODE_COARSE_GATHER: u32 = 4096;
 
 /// Per-pixel state written by the sampling pass.
 pub const FLAG_COVERED: u32 = 1;
@@ -48,6 +50,7 @@ pub fn constants() -> Vec<(&'static str, u32)> {
         ("MODE_NO_SPECULAR", MODE_NO_SPECULAR),
         ("MODE_DEMODULATED", MODE_DEMODULATED),
         ("MODE_EDGES_AT_MAR", MODE_EDGES_AT_MAR),
+        ("MODE_COARSE_GATHER", MODE_COARSE_GATHER),
         ("FLAG_COVERED", FLAG_COVERED),
         ("LOBE_TABLE", crate::optics::specular::ALBEDO_TABLE as u32),
         ("FLAG_SAMPLED", FLAG_SAMPLED),

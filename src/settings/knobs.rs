@@ -182,6 +182,8 @@ knobs! {
     /// Use a cluster whole when its extent < ε × its distance.
     cut_epsilon: f64, "number", Render, [0.0, 10.0]
         => |s, v| s.render.translucency.cut_epsilon = v as f32;
+    /// Photon rungs, frames shaded whole: gather at every other pixel, interpolate where coherent.
+    coarse_gather: bool, "bool", Render => |s, v| s.render.translucency.coarse_gather = v;
     /// Blur by the eye's depth of field.
     dof: bool, "bool", Render => |s, v| s.render.dof = v;
     /// Overlay: none, samples or probability.
@@ -228,7 +230,7 @@ mod tests {
             "min_probability": 0.2, "probability": "linear", "saliency": false, "edges_at_mar": true, "motion": false,
             "noise": "white", "reprojection": false, "max_history_age": 4,
             "reconstruction": "nearest", "sibson_window": 3, "compaction": false,
-            "translucency": "screen", "cut_level": 2, "cut_epsilon": 0.7, "dof": true,
+            "translucency": "screen", "cut_level": 2, "cut_epsilon": 0.7, "coarse_gather": true, "dof": true,
             "overlay": "samples", "prediction": true, "prediction_horizon_ms": 20.0
         });
         let patch: SettingsPatch = serde_json::from_value(json.clone()).unwrap();

@@ -151,6 +151,11 @@ pub struct Translucency {
     pub cut_level: u32,
     /// A cluster is used whole when its extent is below ε × its distance.
     pub cut_epsilon: f32,
+    /// On the photon rungs of a frame shaded whole: gather at every other pixel on each axis
+    /// and interpolate where the surface is coherent (seed 000's screen-space hierarchy),
+    /// gathering per pixel elsewhere.
+    #[serde(default)]
+    pub coarse_gather: bool,
 }
 
 impl Translucency {
@@ -158,6 +163,7 @@ impl Translucency {
         rung: Rung::Hierarchical,
         cut_level: 0,
         cut_epsilon: 0.5,
+        coarse_gather: false,
     };
 }
 

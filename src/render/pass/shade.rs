@@ -2,7 +2,7 @@
 //! (indirect dispatch, cost ∝ samples) or over the whole frame with a mask.
 
 use crate::render::graph::{
-    read, texture, uniform, write, DispatchSize, GraphError, PassDecl, Recorder,
+    read, texture, uniform, write, Dispatch, DispatchSize, GraphError, PassDecl, Recorder,
 };
 
 pub const PASS: PassDecl = PassDecl {
@@ -25,10 +25,40 @@ pub const PASS: PassDecl = PassDecl {
         texture("shadow.depth"),
         read("lights.scene"),
         texture("shadow.atlas"),
+        write("shade.coarse"),
     ],
     attachments: &[],
-    entry_points: &["shade_list", "shade_grid"],
+    entry_points: &["shade_list", "shade_grid", "gather_coarse"],
 };
+
+/// Bytes of one coarse-lattice sample: the gathered light and its coverage, two vec4.
+const COARSE_BYTES: u64 = 32;
+
+/// The coarse lattice: a sample at every other pixel on each axis, (2i, 2j).
+pub fn coarse_size(width: u32, height: u32) -> (u32, u32) {
+    (width.div_ceil(2), height.div_ceil(2))
+}
+
+/// Bytes of the coarse lattice's buffer at this frame size.
+pub fn coarse_bytes(width: u32, height: u32) -> u64 {
+    let (w, h) = coarse_size(width, height);
+    u64::from(w) * u64::from(h) * COARSE_BYTES
+}
+
+/// The gathers on the coarse lattice rows that pixel rows `[first, end)` interpolate from:
+/// row y reads lattice rows ⌊y/2⌋ and, when odd, the one below.
+fn coarse_dispatch(f: &mut Recorder, first: u32, end: u32) -> Result<Dispatch, GraphError> {
+    let (w, h) = coarse_size(f.size.0, f.size.1);
+    let top = first / 2;
+    let bottom = (end.saturating_sub(1) / 2 + 1).min(h.saturating_sub(1));
+    let mut d = f.dispatch(&PASS, "gather_coarse", DispatchSize::Frame)?;
+    d.size = DispatchSize::Groups(
+        w.div_ceil(8),
+        (bottom + 1).saturating_sub(top).div_ceil(8),
+        1,
+    );
+    Ok(d)
+}
 
 /// Shades the listed pixels; the workgroup count comes from `compact.counter[1..4]`.
 pub fn record_list(f: &mut Recorder) -> Result<(), GraphError> {
@@ -38,22 +68,32 @@ pub fn record_list(f: &mut Recorder) -> Result<(), GraphError> {
     Ok(())
 }
 
-/// Shades every pixel (the flags mask it when foveated without compaction).
-pub fn record_grid(f: &mut Recorder) -> Result<(), GraphError> {
-    let d = f.frame_dispatch(&PASS, "shade_grid")?;
-    f.compute(PASS.label, &[d]);
+/// Shades every pixel (the flags mask it when foveated without compaction); with `coarse`
+/// the photon gathers on the coarse lattice run first.
+pub fn record_grid(f: &mut Recorder, coarse: bool) -> Result<(), GraphError> {
+    let mut dispatches = Vec::new();
+    if coarse {
+        dispatches.push(coarse_dispatch(f, 0, f.size.1)?);
+    }
+    dispatches.push(f.frame_dispatch(&PASS, "shade_grid")?);
+    f.compute(PASS.label, &dispatches);
     Ok(())
 }
 
 /// Shades every pixel of rows `[first, end)`: one slice of a frame split so that other frames
 /// can run between its slices. The frame uniform's `shade_rows` must hold the same rows.
-pub fn record_rows(f: &mut Recorder, first: u32, end: u32) -> Result<(), GraphError> {
+pub fn record_rows(f: &mut Recorder, first: u32, end: u32, coarse: bool) -> Result<(), GraphError> {
+    let mut dispatches = Vec::new();
+    if coarse {
+        dispatches.push(coarse_dispatch(f, first, end)?);
+    }
     let mut d = f.frame_dispatch(&PASS, "shade_grid")?;
     d.size = DispatchSize::Groups(
         f.size.0.div_ceil(8),
         end.saturating_sub(first).div_ceil(8),
         1,
     );
-    f.compute(PASS.label, &[d]);
+    dispatches.push(d);
+    f.compute(PASS.label, &dispatches);
     Ok(())
 }
