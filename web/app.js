@@ -290,7 +290,9 @@ export function sendSettings(presetChanged = false) {
     if (v !== '' && !presetChanged) msg[name] = Number(v);
   }
   if (controls.reconstruction.dataset.touched && !presetChanged) msg.reconstruction = controls.reconstruction.value;
-  if (controls.edges_at_mar.dataset.touched && !presetChanged) msg.edges_at_mar = controls.edges_at_mar.checked;
+  for (const name of ['edges_at_mar', 'coarse_gather']) {
+    if (controls[name].dataset.touched && !presetChanged) msg[name] = controls[name].checked;
+  }
   send(msg);
   expectFrame();
 }

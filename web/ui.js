@@ -7,7 +7,7 @@ export const controls = {
   scene: $('scene'), size: $('size'), codec: $('codec'), encoding: $('encoding'), preset: $('preset'),
   overlay: $('overlay-mode'), dof: $('dof'), pupil: $('pupil'), predict: $('predict'),
   auto: $('auto-gaze'), ring: $('fovea-ring'), reconstruction: $('reconstruction'),
-  edges_at_mar: $('edges_at_mar'),
+  edges_at_mar: $('edges_at_mar'), coarse_gather: $('coarse_gather'),
   mar_slope: $('mar_slope'), mar_w0_deg: $('mar_w0_deg'), min_probability: $('min_probability'),
 };
 
@@ -138,11 +138,13 @@ export function bindControls(app) {
       controls[name].placeholder = 'preset';
     }
     delete controls.reconstruction.dataset.touched;
-    delete controls.edges_at_mar.dataset.touched;
-    controls.edges_at_mar.checked = false;
+    for (const box of [controls.edges_at_mar, controls.coarse_gather]) {
+      delete box.dataset.touched;
+      box.checked = false;
+    }
     app.sendSettings(true);
   });
-  for (const el of [controls.reconstruction, controls.edges_at_mar]) {
+  for (const el of [controls.reconstruction, controls.edges_at_mar, controls.coarse_gather]) {
     el.addEventListener('change', () => {
       el.dataset.touched = '1';
       app.sendSettings();

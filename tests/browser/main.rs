@@ -1,7 +1,8 @@
 //! The web client in headless Chromium (the system's, driven over the DevTools protocol with
 //! `chromiumoxide`: no Node.js) against a real `fovea serve`: frames stream, the marker follows
 //! the mouse, scene/size/codec switches keep showing frames, the page reconnects after a
-//! restart, a full server says so, and a settings change after idling is not counted as a
+//! restart, a full server says so, the coarse-gather box reaches the server, and a settings
+//! change after idling is not counted as a
 //! gaze latency. Screenshots of each state land in `target/browser-artifacts/`.
 //!
 //! CHROMIUM names the browser (default: the first of chromium, chromium-browser,
@@ -459,6 +460,49 @@ async fn a_hello_over_the_frame_budget_is_shown_with_the_size_that_fits() {
         "{status}"
     );
     screenshot(&page, "over-budget").await;
+    drop(page);
+    f.finish();
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn the_coarse_gather_box_is_sent_and_accepted_on_the_full_preset() {
+    let f = Fixture::start(&[]).await;
+    let page = f.page().await;
+    gaze_at(&page, 0.5, 0.5).await;
+    let change = |id: &str, set: &str| {
+        format!("(() => {{ const e = document.getElementById('{id}'); {set}; e.dispatchEvent(new Event('change')); return true; }})()")
+    };
+    let frame = "window.fovea.lastHeader.frame";
+    let before = eval(&page, frame).await.as_u64().unwrap();
+    eval(&page, &change("preset", "e.value = 'full'")).await;
+    wait_for(
+        &page,
+        &format!("window.fovea.lastHeader.frame > {before}"),
+        60,
+    )
+    .await;
+    // The box goes out as a settings knob: the server renders a settings frame for it and
+    // answers with no error (a knob it did not know would be refused by name).
+    let before = eval(&page, frame).await.as_u64().unwrap();
+    eval(&page, &change("coarse_gather", "e.checked = true")).await;
+    let h = wait_for(
+        &page,
+        &format!("window.fovea.lastHeader.frame > {before} && window.fovea.lastHeader"),
+        60,
+    )
+    .await;
+    assert_eq!(h["trigger"], "settings", "{h}");
+    assert_eq!(
+        eval(&page, "window.fovea.errors.length").await,
+        0,
+        "the server refused nothing"
+    );
+    assert!(
+        eval(&page, COLOURS).await.as_u64().unwrap() > 50,
+        "the canvas shows the scene"
+    );
+    eval(&page, "document.getElementById('knobs-button').click()").await;
+    screenshot(&page, "coarse-gather-knob").await;
     drop(page);
     f.finish();
 }
