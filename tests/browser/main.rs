@@ -2,8 +2,7 @@
 //! `chromiumoxide`: no Node.js) against a real `fovea serve`: frames stream, the marker follows
 //! the mouse, scene/size/codec switches keep showing frames, the page reconnects after a
 //! restart, a full server says so, the coarse-gather box reaches the server, and a settings
-//! change after idling is not counted as a
-//! gaze latency. Screenshots of each state land in `target/browser-artifacts/`.
+//! change after idling is not counted as a gaze latency. Screenshots of each state land in `target/browser-artifacts/`.
 //!
 //! CHROMIUM names the browser (default: the first of chromium, chromium-browser,
 //! google-chrome on PATH). Without one the tests fail, naming the package to install.
