@@ -238,3 +238,9 @@ impl Fixture {
         self.server.stop()
     }
 }
+
+/// Sets an element's value (`set`, with the element as `e`) and fires its change event, as a
+/// viewer's click does.
+pub fn change(id: &str, set: &str) -> String {
+    format!("(() => {{ const e = document.getElementById('{id}'); {set}; e.dispatchEvent(new Event('change')); return true; }})()")
+}

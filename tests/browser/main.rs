@@ -9,13 +9,15 @@
 
 mod encoding;
 mod harness;
+mod knobs;
 
 use std::time::Duration;
 
 use serde_json::Value;
 
 use harness::{
-    artifacts, eval, gaze_at, press, screenshot, wait_for, Fixture, Server, COLOURS, CORNER, MARKER,
+    artifacts, change, eval, gaze_at, press, screenshot, wait_for, Fixture, Server, COLOURS,
+    CORNER, MARKER,
 };
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
@@ -302,7 +304,7 @@ async fn a_settings_change_after_idling_is_not_a_gaze_latency() {
         .await
         .as_u64()
         .unwrap();
-    eval(&page, "(() => { const s = document.getElementById('overlay-mode'); s.value = 'probability'; s.dispatchEvent(new Event('change')); return true; })()").await;
+    eval(&page, &change("overlay-mode", "e.value = 'probability'")).await;
     let h = wait_for(
         &page,
         &format!("window.fovea.lastHeader.frame > {frame} && window.fovea.lastHeader"),
@@ -459,49 +461,6 @@ async fn a_hello_over_the_frame_budget_is_shown_with_the_size_that_fits() {
         "{status}"
     );
     screenshot(&page, "over-budget").await;
-    drop(page);
-    f.finish();
-}
-
-#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
-async fn the_coarse_gather_box_is_sent_and_accepted_on_the_full_preset() {
-    let f = Fixture::start(&[]).await;
-    let page = f.page().await;
-    gaze_at(&page, 0.5, 0.5).await;
-    let change = |id: &str, set: &str| {
-        format!("(() => {{ const e = document.getElementById('{id}'); {set}; e.dispatchEvent(new Event('change')); return true; }})()")
-    };
-    let frame = "window.fovea.lastHeader.frame";
-    let before = eval(&page, frame).await.as_u64().unwrap();
-    eval(&page, &change("preset", "e.value = 'full'")).await;
-    wait_for(
-        &page,
-        &format!("window.fovea.lastHeader.frame > {before}"),
-        60,
-    )
-    .await;
-    // The box goes out as a settings knob: the server renders a settings frame for it and
-    // answers with no error (a knob it did not know would be refused by name).
-    let before = eval(&page, frame).await.as_u64().unwrap();
-    eval(&page, &change("coarse_gather", "e.checked = true")).await;
-    let h = wait_for(
-        &page,
-        &format!("window.fovea.lastHeader.frame > {before} && window.fovea.lastHeader"),
-        60,
-    )
-    .await;
-    assert_eq!(h["trigger"], "settings", "{h}");
-    assert_eq!(
-        eval(&page, "window.fovea.errors.length").await,
-        0,
-        "the server refused nothing"
-    );
-    assert!(
-        eval(&page, COLOURS).await.as_u64().unwrap() > 50,
-        "the canvas shows the scene"
-    );
-    eval(&page, "document.getElementById('knobs-button').click()").await;
-    screenshot(&page, "coarse-gather-knob").await;
     drop(page);
     f.finish();
 }
