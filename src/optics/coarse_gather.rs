@@ -102,24 +102,31 @@ mod tests {
         );
     }
 
-    #[test]
-    fn a_depth_step_gathers_per_pixel_at_the_step_only() {
-        // Columns 5 and beyond lie 1 unit farther: only pixel 5, blended from lattice columns 4
-        // (near) and 6 (far), straddles it; 3 blends 2 and 4, both near, 7 blends 6 and 8.
-        let at = plane(|x, _, s| {
-            if x >= 5 {
+    /// The plane with columns from `col` on 1 unit farther, and the columns of row 2 that
+    /// gather per pixel there.
+    fn per_pixel_at_step(col: u32) -> Vec<u32> {
+        let at = plane(move |x, _, s| {
+            if x >= col {
                 s.point[2] += 1.0;
             }
         });
-        let per_pixel: Vec<u32> = (0..9)
+        (0..9)
             .filter(|&x| lattice_weights((x, 2), (9, 9), &at, &all, 0.5).is_none())
-            .collect();
+            .collect()
+    }
+
+    #[test]
+    fn a_depth_step_gathers_per_pixel_at_the_step_only() {
+        // A step before column 5: only pixel 5, blended from lattice columns 4 (near) and 6
+        // (far), straddles it; 3 blends 2 and 4, both near, 7 blends 6 and 8, both far.
         assert_eq!(
-            per_pixel,
+            per_pixel_at_step(5),
             vec![5],
             "the pixels whose lattice neighbours straddle the step"
         );
-        // The same along y, and a step that falls on a lattice column: x ≥ 4 leaves 3 alone.
+        // A step before lattice column 4: now pixel 3 straddles it (2 near, 4 far).
+        assert_eq!(per_pixel_at_step(4), vec![3]);
+        // The same along y.
         let at_y = plane(|_, y, s| {
             if y >= 5 {
                 s.point[2] += 1.0;
@@ -127,15 +134,6 @@ mod tests {
         });
         assert!(lattice_weights((2, 5), (9, 9), &at_y, &all, 0.5).is_none());
         assert!(lattice_weights((2, 4), (9, 9), &at_y, &all, 0.5).is_some());
-        let at4 = plane(|x, _, s| {
-            if x >= 4 {
-                s.point[2] += 1.0;
-            }
-        });
-        let per_pixel4: Vec<u32> = (0..9)
-            .filter(|&x| lattice_weights((x, 2), (9, 9), &at4, &all, 0.5).is_none())
-            .collect();
-        assert_eq!(per_pixel4, vec![3]);
     }
 
     #[test]
