@@ -222,14 +222,21 @@ fn coarse_width() -> i32 {
     return (i32(frame.width) + 1) / 2;
 }
 
-// Where pixel `q` sees the surface, and its material id (−1 where it sees none).
-fn surface_at(q: vec2<i32>) -> vec4<f32> {
+// What pixel `q` sees: the surface point, its normal and its material id (−1: background).
+struct SurfacePoint {
+    x: vec3<f32>,
+    n: vec3<f32>,
+    id: i32,
+}
+
+fn surface_at(q: vec2<i32>) -> SurfacePoint {
     let a = textureLoad(albedo_tex, q, 0);
     if (a.a <= 0.0) {
-        return vec4<f32>(0.0, 0.0, 0.0, -1.0);
+        return SurfacePoint(vec3<f32>(0.0), vec3<f32>(0.0), -1);
     }
     let nd = textureLoad(normal_distance, q, 0);
-    return vec4<f32>(frame.eye + view_ray(vec2<f32>(q) + 0.5) * nd.w, f32(material_id(a.a)));
+    let x = frame.eye + view_ray(vec2<f32>(q) + 0.5) * nd.w;
+    return SurfacePoint(x, nd.xyz, i32(material_id(a.a)));
 }
 
 @compute @workgroup_size(8, 8)
@@ -243,17 +250,16 @@ fn gather_coarse(@builtin(global_invocation_id) id: vec3<u32>) {
     let k = 2u * u32(c.y * coarse_width() + c.x);
     coarse[k] = vec4<f32>(0.0);
     coarse[k + 1u] = vec4<f32>(0.0);
-    let q = 2 * c;
-    let a = textureLoad(albedo_tex, q, 0);
-    if (a.a <= 0.0) {
+    let s = surface_at(2 * c);
+    if (s.id < 0) {
         return;
     }
-    let m = materials[material_id(a.a)];
+    let m = materials[u32(s.id)];
     let rung = rung_for(m);
     if (m.kind == 0u || m.kind == 2u || rung < RUNG_HIERARCHICAL) {
         return;
     }
-    let g = gather_at(surface_at(q).xyz, m, rung);
+    let g = gather_at(s.x, m, rung);
     coarse[k] = vec4<f32>(g.light, 1.0);
     coarse[k + 1u] = vec4<f32>(g.coverage, 0.0);
 }
@@ -289,8 +295,7 @@ fn interpolated(p: vec2<i32>, x: vec3<f32>, n: vec3<f32>, id: u32) -> Interpolat
         let k = 2u * u32(c.y * coarse_width() + c.x);
         let light = coarse[k];
         let s = surface_at(2 * c);
-        let nq = textureLoad(normal_distance, 2 * c, 0).xyz;
-        if (light.w == 0.0 || s.w != f32(id) || distance(s.xyz, x) > reach || dot(nq, n) < COHERENT_COS) {
+        if (light.w == 0.0 || s.id != i32(id) || distance(s.x, x) > reach || dot(s.n, n) < COHERENT_COS) {
             return out;
         }
         out.g.light += w * light.rgb;

@@ -29,9 +29,19 @@ fn max_diff(a: &[u8], b: &[u8]) -> u8 {
 #[test]
 fn a_sliced_frame_with_others_between_its_parts_equals_the_whole_frame() {
     let mut r = renderer();
-    for preset in [Preset::Full, Preset::Reference] {
-        let whole = r.render(&request(preset, 1)).unwrap();
-        let mut going = match r.begin(&request(preset, 2), 5).unwrap() {
+    // (preset, coarse gather): a band's lattice rows overlap its neighbours', each gathers its own.
+    for (preset, coarse) in [
+        (Preset::Full, false),
+        (Preset::Reference, false),
+        (Preset::Full, true),
+    ] {
+        let req = |stream| {
+            let mut q = request(preset, stream);
+            q.settings.translucency.coarse_gather = coarse;
+            q
+        };
+        let whole = r.render(&req(1)).unwrap();
+        let mut going = match r.begin(&req(2), 5).unwrap() {
             Progress::Going(g) => g,
             Progress::Done(_) => {
                 panic!("{preset}: a full-shading frame asked for 5 slices is sliced")

@@ -70,12 +70,18 @@ impl FramePlan {
                 Vec::new()
             },
             i420: false,
-            coarse_gather: s.translucency.coarse_gather
-                && !fov.enabled
-                && needs_dipole
-                && matches!(s.translucency.rung, Rung::Hierarchical | Rung::BruteForce),
+            coarse_gather: coarse_gather(s, needs_dipole),
         }
     }
+}
+
+/// Whether a frame gathers photons on the coarse lattice: asked for, shaded whole, and on a
+/// photon rung with something to gather. One answer for the dispatch and the shader's mode.
+pub fn coarse_gather(s: &RenderSettings, needs_dipole: bool) -> bool {
+    s.translucency.coarse_gather
+        && !s.foveation.enabled
+        && needs_dipole
+        && matches!(s.translucency.rung, Rung::Hierarchical | Rung::BruteForce)
 }
 
 /// Records the frame's passes into `f`'s encoder.

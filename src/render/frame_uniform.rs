@@ -41,10 +41,6 @@ fn mode_bits(s: &crate::settings::RenderSettings) -> u32 {
             fov.reconstruction == Reconstruction::PullPush,
             MODE_DEMODULATED,
         ),
-        (
-            s.translucency.coarse_gather && !fov.enabled,
-            MODE_COARSE_GATHER,
-        ),
         (s.dof, MODE_DOF),
         (!s.indirect, MODE_DIRECT_ONLY),
         (!s.shadows, MODE_NO_SHADOWS),
@@ -76,7 +72,12 @@ pub(super) fn frame_uniform(
     };
     let s = &req.settings;
     let fov = &s.foveation;
-    let mode = mode_bits(s);
+    let mode = mode_bits(s)
+        | if super::frame::coarse_gather(s, t.needs_dipole) {
+            MODE_COARSE_GATHER
+        } else {
+            0
+        };
     let viewing = Viewing::new(req.display, w, h);
     let gaze_px = viewing.to_pixels(req.gaze.map(f64::from));
     let w_min = viewing.pixel_angle_deg();

@@ -51,13 +51,12 @@ fn coarse_dispatch(f: &mut Recorder, first: u32, end: u32) -> Result<Dispatch, G
     let (w, h) = coarse_size(f.size.0, f.size.1);
     let top = first / 2;
     let bottom = (end.saturating_sub(1) / 2 + 1).min(h.saturating_sub(1));
-    let mut d = f.dispatch(&PASS, "gather_coarse", DispatchSize::Frame)?;
-    d.size = DispatchSize::Groups(
-        w.div_ceil(8),
-        (bottom + 1).saturating_sub(top).div_ceil(8),
-        1,
-    );
-    Ok(d)
+    let rows = (bottom + 1).saturating_sub(top);
+    f.dispatch(
+        &PASS,
+        "gather_coarse",
+        DispatchSize::Groups(w.div_ceil(8), rows.div_ceil(8), 1),
+    )
 }
 
 /// Shades the listed pixels; the workgroup count comes from `compact.counter[1..4]`.
