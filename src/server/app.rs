@@ -25,7 +25,7 @@ pub fn router(state: Arc<ServerState>) -> Router {
 /// elsewhere otherwise. Radiosity solves still refining are listed but do not make the server
 /// unready: sessions start on the preview and see it improve.
 async fn readyz(State(state): State<Arc<ServerState>>) -> Response {
-    if state.draining.is_cancelled() {
+    if state.drain_request.is_cancelled() {
         return (StatusCode::SERVICE_UNAVAILABLE, "draining\n").into_response();
     }
     if let Some(reason) = state.render.failing() {
@@ -109,7 +109,7 @@ async fn websocket(
         ::metrics::counter!("fovea_sessions_unauthorised_total").increment(1);
         return refusal.into_response();
     }
-    if state.draining.is_cancelled() {
+    if state.drain_request.is_cancelled() {
         // A balancer that retries on 503 (nginx's proxy_next_upstream http_503) sends the
         // client to another instance within the same request.
         return (

@@ -31,7 +31,6 @@ pub async fn run(state: Arc<ServerState>, stopped: CancellationToken) {
         "draining: not ready, no new sessions, goodbye sent to every session"
     );
     ::metrics::gauge!("fovea_draining").set(1.0);
-    state.draining.cancel();
     state.sessions.close();
     if tokio::time::timeout(grace, state.sessions.wait())
         .await

@@ -48,11 +48,11 @@ pub struct ServerState {
     pub cameras: std::collections::HashMap<String, crate::scene::Camera>,
     /// Session ids, unique for the server's life (logs and `welcome`).
     pub next_session: AtomicU64,
-    /// Cancelled to ask for a drain (SIGTERM, `POST /admin/drain`, a test).
+    /// Cancelled to ask for a drain (SIGTERM, `POST /admin/drain`, a test). From that instant
+    /// `/readyz` answers 503, no session is admitted and every session says goodbye; one token
+    /// (not a second one set by the drain task) so the 202 to a drain request is never followed
+    /// by a `ready`.
     pub drain_request: CancellationToken,
-    /// Cancelled when the drain begins: `/readyz` answers 503, no session is admitted, every
-    /// session says goodbye to its client.
-    pub draining: CancellationToken,
     /// Cancelled when the drain's grace period ends: every session closes with 1001.
     pub closing: CancellationToken,
     /// How long sessions get to leave by themselves once the drain begins.
@@ -184,7 +184,6 @@ pub async fn run_with(
         cameras,
         next_session: AtomicU64::new(1),
         drain_request: shutdown.clone(),
-        draining: CancellationToken::new(),
         closing: CancellationToken::new(),
         drain_grace: options.drain,
         sessions: TaskTracker::new(),

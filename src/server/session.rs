@@ -81,7 +81,7 @@ pub async fn run(socket: WebSocket, state: Arc<ServerState>, id: u64) {
         let stall_at = tokio::time::Instant::from_std(stall.unwrap_or(Instant::now() + NEVER));
         let replies = tokio::select! {
             _ = state.closing.cancelled() => break Some(close_frame(1001, "server shutting down".into())),
-            _ = state.draining.cancelled(), if !told_goodbye => {
+            _ = state.drain_request.cancelled(), if !told_goodbye => {
                 told_goodbye = true;
                 let bye = super::drain::goodbye(id, state.drain_grace);
                 vec![Outgoing::Text(ServerMessage::Goodbye(bye))]
