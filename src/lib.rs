@@ -22,6 +22,7 @@
 //! - [`client`]: a Rust WebSocket client speaking the protocol (tests, replay, load).
 //! - [`bench`]: the speed/accuracy sweep behind `fovea bench`.
 //! - [`plot`]: the bench, load and gaze plots, SVG and PNG from the same code (`plotters`).
+//! - [`stats`]: the median the benches and the command line report. A leaf.
 //!
 //! The arrows between them point one way; `tests/boundaries.rs` fails on a forbidden one and
 //! `docs/architecture.md` draws them.
@@ -40,4 +41,5 @@ pub mod render;
 pub mod scene;
 pub mod server;
 pub mod settings;
+pub mod stats;
 pub mod viewing;

@@ -80,6 +80,10 @@ enum Command {
         /// Print the scene plan (which passes run, and why) for this scene and size, and exit.
         #[arg(long)]
         explain: bool,
+        /// With --explain: render the scene here both ways, foveated and shaded whole, and say
+        /// whether foveation pays on this adapter at this size (what the server decides per frame).
+        #[arg(long, requires = "explain")]
+        measure: bool,
         /// JPEG quality 1–100.
         #[arg(long, default_value_t = 90, value_parser = clap::value_parser!(u8).range(1..=100))]
         quality: u8,
@@ -177,6 +181,7 @@ fn main() -> Result<()> {
             light,
             out,
             explain,
+            measure,
             quality,
             preset,
             frames,
@@ -190,13 +195,19 @@ fn main() -> Result<()> {
                 .map(|path| cli::scenes::load_own_scene(&path))
                 .transpose()?;
             let scene = own.as_ref().map_or(scene, |s| s.name().to_string());
+            // The same checks a `settings` message gets.
+            let mut settings = fovea::settings::Settings::of(preset);
+            settings.apply(&knobs)?;
             if explain {
                 let s = match &own {
                     Some(s) => s.clone(),
                     None => fovea::scene::Scene::builtin(&scene)?,
                 };
                 print!("{}", fovea::scene::Plan::of(&s, width, height));
-                return Ok(());
+                let mut request = FrameRequest::new(&scene, width, height);
+                request.gaze = gaze;
+                request.settings = settings.render;
+                return cli::scenes::explain_foveation(request, own, measure);
             }
             let out = out.context("--out is required")?;
             let limits = fovea::protocol::Limits::default();
@@ -207,9 +218,6 @@ fn main() -> Result<()> {
                     limits.pupil_mm[1]
                 );
             }
-            // The same checks a `settings` message gets.
-            let mut settings = fovea::settings::Settings::of(preset);
-            settings.apply(&knobs)?;
             eprintln!("preset {}", settings.label());
             let mut request = FrameRequest::new(&scene, width, height);
             request.gaze = gaze;

@@ -3,7 +3,8 @@
 
 use std::path::{Path, PathBuf};
 
-/// (module, modules it must not name). `settings` and `viewing` are leaves: they name nothing.
+/// (module, modules it must not name). `settings`, `viewing` and `stats` are leaves: they name
+/// nothing.
 const FORBIDDEN: &[(&str, &[&str])] = &[
     ("render", &["protocol", "server", "client", "bench", "gaze"]),
     (
@@ -20,6 +21,7 @@ const FORBIDDEN: &[(&str, &[&str])] = &[
     ),
     ("settings", &["*"]),
     ("viewing", &["*"]),
+    ("stats", &["*"]),
     ("foveation", &["protocol", "render", "server", "client"]),
     ("radiosity", &["protocol", "render", "server", "client"]),
     ("scene", &["protocol", "render", "server", "client"]),

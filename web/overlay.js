@@ -65,6 +65,8 @@ export function overlayText(stats, header, nowMs) {
     lines.push(`       readback ${ms(s.readback)} encode ${ms(s.encode)} ms`);
     lines.push(`frame ${header.frame} (${header.trigger ?? 'gaze'})  ${header.width}×${header.height} ${header.codec}${header.keyframe ? ' (key)' : ''}${header.inset ? ` inset ${header.inset.width}×${header.inset.height} over ${header.inset.base_width}×${header.inset.base_height}` : ''}`);
     lines.push(`shaded ${(100 * header.sampled).toFixed(1)}%  gaze ${header.gaze.x.toFixed(3)}, ${header.gaze.y.toFixed(3)}`);
+    // The server shades a foveated session's frame whole where foveation does not pay.
+    if (header.unfoveated) lines.push(header.unfoveated);
     const gi = header.radiosity;
     if (gi) {
       // The scene's radiosity solve: the preview sharpens until it converges.

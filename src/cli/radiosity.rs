@@ -1,6 +1,7 @@
 //! `fovea radiosity`: solve a scene's radiosity in the foreground and report how it converges,
 //! then what the cached result costs a frame.
 
+use fovea::stats::median;
 use std::path::PathBuf;
 use std::time::{Duration, Instant};
 
@@ -43,11 +44,6 @@ fn time_to(curve: &[(f64, Stats)], share: f64) -> Option<(f64, u32)> {
         .iter()
         .find(|(_, s)| s.reflected >= share * last)
         .map(|(t, s)| (*t, s.shots))
-}
-
-fn median(mut v: Vec<f64>) -> f64 {
-    v.sort_by(f64::total_cmp);
-    v.get(v.len() / 2).copied().unwrap_or(f64::NAN)
 }
 
 pub fn radiosity(a: RadiosityArgs) -> Result<()> {

@@ -2,6 +2,7 @@
 //! groups) on a log time axis, the Pareto front drawn and its points labelled, presets in
 //! bold, the legend inside the plot.
 
+use crate::stats::median;
 use std::collections::BTreeMap;
 
 use plotters::coord::Shift;
@@ -87,11 +88,6 @@ fn one_two_five(lo: f64, hi: f64) -> Vec<f64> {
         decade *= 10.0;
     }
     out
-}
-
-fn median(mut v: Vec<f64>) -> f64 {
-    v.sort_by(|a, b| a.total_cmp(b));
-    v[v.len() / 2]
 }
 
 impl BenchPlot {

@@ -67,6 +67,11 @@ pub struct FrameHeader {
     pub inset: Option<InsetHeader>,
     /// Fraction of pixels shaded this frame (1.0 without foveation).
     pub sampled: f64,
+    /// Set when the session asked for foveation but the server shaded this frame whole, with
+    /// why: on this adapter a foveated frame of this scene costs no less than a whole one, or
+    /// (now and then) to measure what foveation saves.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub unfoveated: Option<String>,
     /// Gaze samples the session had received when this frame was made (lost = sent − this).
     #[serde(default)]
     pub samples: u64,
@@ -180,6 +185,7 @@ mod tests {
                 packed: None,
             }),
             sampled: 1.0,
+            unfoveated: Some("shaded whole: foveation does not pay here".into()),
             samples: 17,
             stages_ms: StageTimes {
                 queue: 0.1,

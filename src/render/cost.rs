@@ -7,11 +7,12 @@
 //! frames expected to be long into slices. Estimates start from a calibration at start-up
 //! ([`calibrate`]) and follow the frames actually rendered.
 
+use crate::stats::median;
 use std::collections::HashMap;
 use std::sync::{Arc, Mutex};
 
 use super::request::FrameRequest;
-use super::Renderer;
+use super::{RenderError, Renderer};
 use crate::settings::{Preset, RenderSettings};
 
 /// Weight of the newest frame in the running estimate: a few frames to follow a change, not
@@ -102,6 +103,23 @@ impl CostModel {
         }
     }
 
+    /// What foveating `req` is expected to save, from frames of its own scene and rung rendered
+    /// both ways on this adapter; `None` until both kinds have been measured (another scene's
+    /// figures do not decide this: how much a scene's shading weighs against the fixed passes
+    /// is the very thing that differs).
+    pub fn foveation_verdict(&self, req: &FrameRequest) -> Option<Verdict> {
+        let map = self.0.lock().ok()?;
+        let mp = megapixels(req);
+        let class = |foveated| CostClass {
+            foveated,
+            ..CostClass::of(req)
+        };
+        Some(Verdict {
+            foveated_ms: map.get(&class(true))?.at(mp),
+            whole_ms: map.get(&class(false))?.at(mp),
+        })
+    }
+
     /// Sets a kind of frame's cost from two frames of different sizes.
     fn calibrated(&self, small: (&FrameRequest, f64), large: (&FrameRequest, f64)) {
         let point = |(r, ms): (&FrameRequest, f64)| (megapixels(r), ms);
@@ -110,6 +128,61 @@ impl CostModel {
             map.insert(CostClass::of(small.0), fit);
         }
     }
+}
+
+/// A foveated frame's expected cost against the same frame shaded whole.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Verdict {
+    pub foveated_ms: f64,
+    pub whole_ms: f64,
+}
+
+/// Foveation must save at least this share of the whole frame to be worth what it costs in
+/// the periphery: within 5% the two are within this machine's frame-to-frame noise.
+pub const WORTH_SAVING: f64 = 0.05;
+
+impl Verdict {
+    /// Whether foveating saves enough to be worth it.
+    pub fn pays(&self) -> bool {
+        self.foveated_ms < self.whole_ms * (1.0 - WORTH_SAVING)
+    }
+}
+
+impl std::fmt::Display for Verdict {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(
+            f,
+            "foveated ~{:.0} ms, shaded whole ~{:.0} ms",
+            self.foveated_ms, self.whole_ms
+        )
+    }
+}
+
+/// Renders `req` foveated and shaded whole, `frames` times each (interleaved, so a machine
+/// slowing down weighs on both alike) after one each that builds pipelines, and compares the
+/// median render times as the render thread compares its estimates.
+pub fn measure_foveation(
+    renderer: &mut Renderer,
+    req: &FrameRequest,
+    frames: u32,
+) -> Result<Verdict, RenderError> {
+    let mut whole = req.clone();
+    whole.settings.foveation.enabled = false;
+    let mut foveated = req.clone();
+    foveated.settings.foveation.enabled = true;
+    for r in [&foveated, &whole] {
+        renderer.render(r)?;
+    }
+    let (mut f, mut w) = (Vec::new(), Vec::new());
+    for _ in 0..frames.max(1) {
+        f.push(renderer.render(&foveated)?.render_ms);
+        w.push(renderer.render(&whole)?.render_ms);
+    }
+    renderer.release_stream(req.stream);
+    Ok(Verdict {
+        foveated_ms: median(f),
+        whole_ms: median(w),
+    })
 }
 
 /// Renders frames of `scene` for each preset at two sizes so the first sessions' estimates come
@@ -199,6 +272,41 @@ mod tests {
         // A larger frame measured faster gives no negative per-pixel cost.
         let f = Fit::through((0.1, 50.0), (0.2, 40.0)).unwrap();
         assert!(f.per_mp == 0.0 && f.fixed_ms == 50.0);
+    }
+
+    #[test]
+    fn foveation_is_judged_on_its_own_scene_and_rung_measured_both_ways() {
+        let m = CostModel::default();
+        let fov = req(640, 480, Preset::Balanced);
+        assert_eq!(m.foveation_verdict(&fov), None);
+        m.record(&fov, 80.0);
+        // Half the evidence is no verdict.
+        assert_eq!(m.foveation_verdict(&fov), None);
+        // Another scene shaded whole says nothing about this one.
+        let mut elsewhere = req(640, 480, Preset::Full);
+        elsewhere.scene = "opaque".into();
+        m.record(&elsewhere, 10.0);
+        assert_eq!(m.foveation_verdict(&fov), None);
+        m.record(&req(640, 480, Preset::Full), 200.0);
+        let v = m.foveation_verdict(&fov).unwrap();
+        assert_eq!((v.foveated_ms, v.whole_ms), (80.0, 200.0));
+        assert!(v.pays());
+        // Saving less than WORTH_SAVING is not worth it; costing more certainly is not.
+        let close = Verdict {
+            foveated_ms: 196.0,
+            whole_ms: 200.0,
+        };
+        assert!(!close.pays());
+        let dearer = Verdict {
+            foveated_ms: 30.0,
+            whole_ms: 25.0,
+        };
+        assert!(!dearer.pays());
+        assert_eq!(dearer.to_string(), "foveated ~30 ms, shaded whole ~25 ms");
+        // A different rung is a different verdict.
+        let mut other = fov.clone();
+        other.settings.translucency.rung = Rung::Opaque;
+        assert_eq!(m.foveation_verdict(&other), None);
     }
 
     #[test]

@@ -13,6 +13,7 @@
 pub mod cost;
 pub mod cpu_reference;
 mod device;
+mod foveation_policy;
 pub mod frame;
 mod frame_uniform;
 mod gi;

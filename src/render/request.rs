@@ -100,6 +100,8 @@ pub struct RenderedFrame {
     pub passes_ms: std::collections::BTreeMap<String, f64>,
     /// Where the scene's radiosity solve stood when this frame used it; `None` without one.
     pub radiosity: Option<Progress>,
+    /// Why a foveated request was shaded whole (see `foveation_policy`); `None` otherwise.
+    pub unfoveated: Option<String>,
 }
 
 /// Intermediate images of the last frame of a stream, for tests and diagnostics.

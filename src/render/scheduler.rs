@@ -9,6 +9,7 @@ use std::time::Instant;
 use tokio::sync::{mpsc, oneshot};
 
 use super::cost::CostModel;
+use super::foveation_policy::FoveationPolicy;
 use super::health::Health;
 use super::sliced::{FrameInFlight, Progress};
 use super::thread::{Job, Rendered};
@@ -27,6 +28,8 @@ struct Task {
     request: FrameRequest,
     reply: oneshot::Sender<Result<Rendered, RenderError>>,
     seq: u64,
+    /// Why its foveated request is being shaded whole, if it is.
+    unfoveated: Option<String>,
     /// Set once its first part has run.
     going: Option<Going>,
 }
@@ -44,10 +47,12 @@ pub struct Scheduler {
     tasks: Vec<Task>,
     arrivals: u64,
     health: Health,
-    /// (stream, scene, width, height) that have rendered a frame: a stream's first frame at a
-    /// size makes its targets and may compile pipelines or build the scene's maps, seconds on
-    /// a cold software driver, so it teaches the cost model nothing about the next ones.
-    warm: std::collections::HashSet<(u64, String, u32, u32)>,
+    /// (stream, scene, width, height, foveated) that have rendered a frame: a stream's first
+    /// frame of a kind at a size makes its targets and may compile pipelines or build the
+    /// scene's maps, seconds on a cold software driver, so it teaches the cost model nothing
+    /// about the next ones.
+    warm: std::collections::HashSet<(u64, String, u32, u32, bool)>,
+    foveation: FoveationPolicy,
 }
 
 impl Scheduler {
@@ -60,6 +65,7 @@ impl Scheduler {
             arrivals: 0,
             health,
             warm: Default::default(),
+            foveation: FoveationPolicy::default(),
         }
     }
 
@@ -85,18 +91,21 @@ impl Scheduler {
 
     fn take(&mut self, job: Job) {
         match job {
-            Job::Render { request, reply } => {
+            Job::Render { mut request, reply } => {
                 self.arrivals += 1;
                 self.turns.arrive(request.stream);
+                let unfoveated = self.foveation.apply(&self.cost, &mut request);
                 self.tasks.push(Task {
                     request,
                     reply,
                     seq: self.arrivals,
+                    unfoveated,
                     going: None,
                 });
             }
             Job::Release(stream) => {
                 self.turns.forget(stream);
+                self.foveation.forget(stream);
                 self.warm.retain(|k| k.0 != stream);
                 let before = self.tasks.len();
                 self.tasks.retain(|t| t.request.stream != stream);
@@ -208,14 +217,14 @@ impl Scheduler {
             .map_or((begun, ms), |g| (g.started, g.spent_ms));
         let mut restart = false;
         let result = match outcome {
-            Ok(Some(frame)) => {
+            Ok(Some(mut frame)) => {
                 let r = &task.request;
-                if !self
-                    .warm
-                    .insert((r.stream, r.scene.clone(), r.width, r.height))
-                {
+                let foveated = r.settings.foveation.enabled;
+                let kind = (r.stream, r.scene.clone(), r.width, r.height, foveated);
+                if !self.warm.insert(kind) {
                     self.cost.record(r, spent);
                 }
+                frame.unfoveated = task.unfoveated.clone();
                 self.health.frame_ok();
                 Ok(Rendered { frame, started })
             }

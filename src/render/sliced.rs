@@ -294,6 +294,7 @@ impl Renderer {
             readback_ms,
             passes_ms: std::mem::take(&mut f.passes_ms),
             radiosity: self.scenes.get(&f.req.scene).and_then(|s| s.gi),
+            unfoveated: None,
         })
     }
 }

@@ -160,6 +160,7 @@ pub async fn make(render: RenderHandle, job: FrameJob) -> Result<MadeFrame, Fram
         bytes: image.len(),
         inset,
         sampled: frame.sampled,
+        unfoveated: frame.unfoveated,
         samples: t.samples,
         stages_ms: times.stages(),
         passes_ms: frame.passes_ms,

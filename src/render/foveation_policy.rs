@@ -1,0 +1,145 @@
+//! Foveation only where it wins. Foveating adds passes whose cost does not fall with the shaded
+//! samples (the sampling map, compaction, reconstruction); on a scene whose shading is cheap, or
+//! on an adapter where those passes weigh more than on ours, a foveated frame can cost as much
+//! as the frame shaded whole, and then it only loses detail. The render thread asks the cost
+//! model, which has seen frames of the scene rendered both ways on this adapter, and shades
+//! such a frame whole instead, saying why in the frame it returns.
+//!
+//! Until the scene has been measured both ways, every `PROBE_EVERY`-th frame of a stream is
+//! shaded whole to learn what that costs (the first such frame builds pipelines and is not
+//! counted, so it takes two). While foveation loses, every `PROBE_EVERY`-th frame is foveated
+//! again so the verdict can change back (the gaze moving onto cheap surfaces, say). While it
+//! wins, nothing is probed: a whole frame in a foveated stream is a latency spike.
+
+use std::collections::HashMap;
+
+use super::cost::CostModel;
+use super::request::FrameRequest;
+
+/// Frames of a stream between probes of the choice not taken.
+pub const PROBE_EVERY: u64 = 64;
+
+/// Per stream, how many foveated frames it has asked for, and whether the last verdict was
+/// that foveation does not pay (logged when that changes, not per frame).
+#[derive(Debug, Default)]
+pub struct FoveationPolicy {
+    frames: HashMap<u64, (u64, bool)>,
+}
+
+impl FoveationPolicy {
+    /// Turns foveation off in `req` where it does not pay (or to measure it); returns why, for
+    /// the frame's header. Requests without foveation are left alone.
+    pub fn apply(&mut self, cost: &CostModel, req: &mut FrameRequest) -> Option<String> {
+        if !req.settings.foveation.enabled {
+            return None;
+        }
+        let (n, losing) = self.frames.entry(req.stream).or_default();
+        *n += 1;
+        let probe = *n % PROBE_EVERY == 0;
+        let verdict = cost.foveation_verdict(req);
+        if let Some(v) = verdict.filter(|v| v.pays() == *losing) {
+            *losing = !v.pays();
+            let (stream, scene) = (req.stream, &req.scene);
+            let now = if *losing {
+                "shading whole"
+            } else {
+                "foveating"
+            };
+            tracing::info!(stream, scene, "{now}: {v}");
+        }
+        let why = match verdict {
+            None if probe => {
+                "shaded whole once to measure what foveation saves on this scene".to_string()
+            }
+            None => return None,
+            Some(v) if v.pays() || probe => return None,
+            Some(v) => format!("shaded whole: foveation does not pay here ({v})"),
+        };
+        req.settings.foveation.enabled = false;
+        Some(why)
+    }
+
+    /// Forgets a stream that has ended.
+    pub fn forget(&mut self, stream: u64) {
+        self.frames.remove(&stream);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::settings::{Preset, RenderSettings};
+
+    fn req(preset: Preset, stream: u64) -> FrameRequest {
+        FrameRequest {
+            settings: RenderSettings::of(preset),
+            stream,
+            ..FrameRequest::new("gallery", 640, 480)
+        }
+    }
+
+    /// Which of frames 1..=n of a stream the policy shades whole.
+    fn whole_frames(p: &mut FoveationPolicy, cost: &CostModel, stream: u64, n: u64) -> Vec<u64> {
+        (1..=n)
+            .filter(|_| {
+                let mut r = req(Preset::Balanced, stream);
+                let why = p.apply(cost, &mut r);
+                assert_eq!(why.is_some(), !r.settings.foveation.enabled);
+                why.is_some()
+            })
+            .collect()
+    }
+
+    #[test]
+    fn unmeasured_scenes_are_probed_and_frames_shaded_whole_are_left_alone() {
+        let cost = CostModel::default();
+        let mut p = FoveationPolicy::default();
+        let mut full = req(Preset::Full, 1);
+        assert_eq!(p.apply(&cost, &mut full), None);
+        assert_eq!(full.settings, RenderSettings::of(Preset::Full));
+        let mut whole = Vec::new();
+        for i in 1..=3 * PROBE_EVERY {
+            let mut r = req(Preset::Balanced, 1);
+            if let Some(why) = p.apply(&cost, &mut r) {
+                assert!(why.contains("measure"), "{why}");
+                assert!(!r.settings.foveation.enabled);
+                whole.push(i);
+            }
+        }
+        assert_eq!(whole, [PROBE_EVERY, 2 * PROBE_EVERY, 3 * PROBE_EVERY]);
+        // A stream that ends and comes back starts counting again.
+        p.forget(1);
+        let mut r = req(Preset::Balanced, 1);
+        assert_eq!(p.apply(&cost, &mut r), None);
+    }
+
+    #[test]
+    fn foveation_that_pays_is_never_interrupted_and_one_that_does_not_is_rechecked() {
+        let cost = CostModel::default();
+        cost.record(&req(Preset::Balanced, 1), 50.0);
+        cost.record(&req(Preset::Full, 1), 200.0);
+        let mut p = FoveationPolicy::default();
+        assert!(whole_frames(&mut p, &cost, 1, 2 * PROBE_EVERY).is_empty());
+
+        let cheap = CostModel::default();
+        cheap.record(&req(Preset::Balanced, 1), 60.0);
+        cheap.record(&req(Preset::Full, 1), 40.0);
+        let mut p = FoveationPolicy::default();
+        let n = 2 * PROBE_EVERY;
+        let whole = whole_frames(&mut p, &cheap, 2, n);
+        // Every frame but the probes is shaded whole.
+        let foveated: Vec<u64> = (1..=n).filter(|i| !whole.contains(i)).collect();
+        assert_eq!(foveated, [PROBE_EVERY, 2 * PROBE_EVERY]);
+        let mut r = req(Preset::Balanced, 3);
+        let why = p.apply(&cheap, &mut r).unwrap();
+        assert_eq!(
+            why,
+            "shaded whole: foveation does not pay here (foveated ~60 ms, shaded whole ~40 ms)"
+        );
+        // Each rendered frame teaches the model; once foveation wins again, it stays on.
+        for _ in 0..40 {
+            cheap.record(&req(Preset::Balanced, 2), 10.0);
+        }
+        assert!(whole_frames(&mut p, &cheap, 2, PROBE_EVERY).is_empty());
+    }
+}
