@@ -24,14 +24,24 @@ const NEWEST: f64 = 0.2;
 struct CostClass {
     scene: String,
     foveated: bool,
+    /// A foveated frame's sampling and reconstruction knobs (empty when not foveated): presets
+    /// sharing a rung shade from 2% to 20% of the pixels and reconstruct differently.
+    sampling: String,
     rung: u32,
 }
 
 impl CostClass {
     fn of(req: &FrameRequest) -> CostClass {
+        let f = &req.settings.foveation;
         CostClass {
             scene: req.scene.clone(),
-            foveated: req.settings.foveation.enabled,
+            foveated: f.enabled,
+            // Every knob, so two settings that differ in any are never averaged together.
+            sampling: if f.enabled {
+                format!("{f:?}")
+            } else {
+                String::new()
+            },
             rung: req.settings.translucency.rung.id(),
         }
     }
@@ -108,15 +118,16 @@ impl CostModel {
     /// figures do not decide this: how much a scene's shading weighs against the fixed passes
     /// is the very thing that differs).
     pub fn foveation_verdict(&self, req: &FrameRequest) -> Option<Verdict> {
+        if !req.settings.foveation.enabled {
+            return None;
+        }
         let map = self.0.lock().ok()?;
         let mp = megapixels(req);
-        let class = |foveated| CostClass {
-            foveated,
-            ..CostClass::of(req)
-        };
+        let mut whole = req.clone();
+        whole.settings.foveation.enabled = false;
         Some(Verdict {
-            foveated_ms: map.get(&class(true))?.at(mp),
-            whole_ms: map.get(&class(false))?.at(mp),
+            foveated_ms: map.get(&CostClass::of(req))?.at(mp),
+            whole_ms: map.get(&CostClass::of(&whole))?.at(mp),
         })
     }
 
@@ -185,6 +196,9 @@ pub fn measure_foveation(
     })
 }
 
+/// Frames timed per preset and size at start-up (after one that is not).
+const CALIBRATION_FRAMES: usize = 3;
+
 /// Renders frames of `scene` for each preset at two sizes so the first sessions' estimates come
 /// from this adapter (a first frame at each size builds pipelines and is not counted). Returns
 /// each preset's estimate for a 1920×1080 frame, for the log.
@@ -198,11 +212,14 @@ pub fn calibrate(renderer: &mut Renderer, model: &CostModel, scene: &str) -> Vec
             ..FrameRequest::new(scene, w, h)
         };
         let (small, large) = (at(160, 120), at(480, 360));
-        let mut time = |req: &FrameRequest| {
-            renderer
-                .render(req)
-                .and_then(|_| renderer.render(req))
-                .map(|f| f.render_ms)
+        // After a frame that builds pipelines and history, the median of a few: one frame of
+        // a noisy machine decided whether a preset's foveation pays.
+        let mut time = |req: &FrameRequest| -> Result<f64, RenderError> {
+            renderer.render(req)?;
+            let timed: Result<Vec<f64>, RenderError> = (0..CALIBRATION_FRAMES)
+                .map(|_| renderer.render(req).map(|f| f.render_ms))
+                .collect();
+            Ok(median(timed?))
         };
         match (time(&small), time(&large)) {
             (Ok(a), Ok(b)) => {
@@ -303,6 +320,9 @@ mod tests {
         };
         assert!(!dearer.pays());
         assert_eq!(dearer.to_string(), "foveated ~30 ms, shaded whole ~25 ms");
+        // A frame that is not foveated has no verdict; other sampling knobs are another kind.
+        assert_eq!(m.foveation_verdict(&req(640, 480, Preset::Full)), None);
+        assert_eq!(m.foveation_verdict(&req(640, 480, Preset::Fast)), None);
         // A different rung is a different verdict.
         let mut other = fov.clone();
         other.settings.translucency.rung = Rung::Opaque;
