@@ -83,6 +83,22 @@ fn a_tiny_sweep_writes_json_markdown_and_svg() {
 
     let md = std::fs::read_to_string(dir.join("bench.md")).unwrap();
     assert!(md.contains("| ") && md.contains("full") && md.contains("fast") && md.contains("FLIP"));
+    // What the server would do with `fast`'s frames follows from the measured ratio.
+    let fast = records.iter().find(|r| r["config"] == "fast").unwrap();
+    let speedup = fast["speedup_vs_full"].as_f64().unwrap();
+    let table = &md[md
+        .find("## Foveation against full")
+        .expect("foveation section")..];
+    let row = table
+        .lines()
+        .find(|l| l.contains("| fast |"))
+        .expect("a row for fast");
+    let expect = if speedup * 0.95 > 1.0 {
+        "| foveates |"
+    } else {
+        "| shades whole |"
+    };
+    assert!(row.contains(expect), "{speedup}: {row}");
     // The per-pass table: a column per configuration, the foveated passes only under `fast`,
     // frame order (G-buffer before sampling before shading).
     let passes = &md[md.find("## Per pass").expect("per-pass section")..];

@@ -8,6 +8,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::protocol::{Codec, Display};
 use crate::quality::Errors;
+use crate::render::cost::WORTH_SAVING;
 use crate::settings::RenderSettings;
 
 /// Median and 10th/90th percentiles (nearest rank) of a set of samples.
@@ -304,7 +305,7 @@ impl BenchReport {
             return String::new();
         }
         let mut s = String::from(
-            "\n## Foveation against full: cost and distance to the ideal\n\n*Overhead* is the GPU time of the passes foveation adds (sampling, compaction, reconstruction), also as a share of `full`'s frame; *ideal* is the ratio if a frame cost in proportion to the pixels it shades (1 / shaded); errors are against the `full` render of the same frame.\n\n| group | configuration | shaded | overhead ms | overhead / full | achieved | ideal | achieved / ideal | PSNR vs full | FLIP vs full | FLIP 5° vs full |\n|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n",
+            "\n## Foveation against full: cost and distance to the ideal\n\n*Overhead* is the GPU time of the passes foveation adds (sampling, compaction, reconstruction), also as a share of `full`'s frame; *ideal* is the ratio if a frame cost in proportion to the pixels it shades (1 / shaded); errors are against the `full` render of the same frame; *server* is what the render thread would do with such frames: foveate them, or shade them whole where foveating saves under 5% (`render::cost::WORTH_SAVING`).\n\n| group | configuration | shaded | overhead ms | overhead / full | achieved | ideal | achieved / ideal | server | PSNR vs full | FLIP vs full | FLIP 5° vs full |\n|---|---|---:|---:|---:|---:|---:|---:|---|---:|---:|---:|\n",
         );
         for r in rows {
             let (achieved, ideal) = (
@@ -322,8 +323,14 @@ impl BenchReport {
                             format!("{:.4}", e.flip_fovea),
                         )
                     });
+            // The same test as `cost::Verdict::pays`, against `full`'s frame.
+            let server = if achieved * (1.0 - WORTH_SAVING) > 1.0 {
+                "foveates"
+            } else {
+                "shades whole"
+            };
             s.push_str(&format!(
-                "| {} {}×{} ({:.2}, {:.2}) | {} | {:.1}% | {:.1} | {:.0}% | {:.2}× | {:.1}× | {:.0}% | {psnr} | {flip} | {flip5} |\n",
+                "| {} {}×{} ({:.2}, {:.2}) | {} | {:.1}% | {:.1} | {:.0}% | {:.2}× | {:.1}× | {:.0}% | {server} | {psnr} | {flip} | {flip5} |\n",
                 r.scene, r.width, r.height, r.gaze[0], r.gaze[1], r.config,
                 100.0 * r.sampled, r.overhead_ms, 100.0 * r.overhead_ms / full_ms,
                 achieved, ideal, 100.0 * achieved / ideal,
