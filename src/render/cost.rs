@@ -155,7 +155,12 @@ pub const WORTH_SAVING: f64 = 0.05;
 impl Verdict {
     /// Whether foveating saves enough to be worth it.
     pub fn pays(&self) -> bool {
-        self.foveated_ms < self.whole_ms * (1.0 - WORTH_SAVING)
+        self.saves(WORTH_SAVING)
+    }
+
+    /// Whether foveating saves more than `share` of the whole frame's cost.
+    pub fn saves(&self, share: f64) -> bool {
+        self.foveated_ms < self.whole_ms * (1.0 - share)
     }
 }
 

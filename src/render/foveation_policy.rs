@@ -13,11 +13,16 @@
 
 use std::collections::HashMap;
 
-use super::cost::CostModel;
+use super::cost::{CostModel, WORTH_SAVING};
 use super::request::FrameRequest;
 
 /// Frames of a stream between probes of the choice not taken.
 pub const PROBE_EVERY: u64 = 64;
+
+/// What foveating must save for a stream shading whole to foveate again: more than the 5% that
+/// keeps it foveating, so estimates hovering at the threshold do not flip the periphery's look
+/// every frame (they did at 160×120 on `gallery`, where the two cost within 10%).
+pub const RESUME_SAVING: f64 = 0.15;
 
 /// Per stream, how many foveated frames it has asked for, and whether the last verdict was
 /// that foveation does not pay (logged when that changes, not per frame).
@@ -37,22 +42,25 @@ impl FoveationPolicy {
         *n += 1;
         let probe = *n % PROBE_EVERY == 0;
         let verdict = cost.foveation_verdict(req);
-        if let Some(v) = verdict.filter(|v| v.pays() == *losing) {
-            *losing = !v.pays();
-            let (stream, scene) = (req.stream, &req.scene);
-            let now = if *losing {
-                "shading whole"
-            } else {
-                "foveating"
-            };
-            tracing::info!(stream, scene, "{now}: {v}");
+        if let Some(v) = verdict {
+            let need = if *losing { RESUME_SAVING } else { WORTH_SAVING };
+            if v.saves(need) == *losing {
+                *losing = !*losing;
+                let (stream, scene) = (req.stream, &req.scene);
+                let now = if *losing {
+                    "shading whole"
+                } else {
+                    "foveating"
+                };
+                tracing::info!(stream, scene, "{now}: {v}");
+            }
         }
         let why = match verdict {
             None if probe => {
                 "shaded whole once to measure what foveation saves on this scene".to_string()
             }
             None => return None,
-            Some(v) if v.pays() || probe => return None,
+            Some(_) if !*losing || probe => return None,
             Some(v) => format!("shaded whole: foveation does not pay here ({v})"),
         };
         req.settings.foveation.enabled = false;
@@ -141,5 +149,26 @@ mod tests {
             cheap.record(&req(Preset::Balanced, 2), 10.0);
         }
         assert!(whole_frames(&mut p, &cheap, 2, PROBE_EVERY).is_empty());
+    }
+
+    #[test]
+    fn a_saving_between_the_two_thresholds_keeps_each_stream_as_it_was() {
+        let cost = CostModel::default();
+        let between = 1.0 - (WORTH_SAVING + RESUME_SAVING) / 2.0;
+        cost.record(&req(Preset::Balanced, 1), 100.0 * between);
+        cost.record(&req(Preset::Full, 1), 100.0);
+        let mut p = FoveationPolicy::default();
+        // A new stream foveates: the saving is over WORTH_SAVING.
+        assert!(whole_frames(&mut p, &cost, 1, 10).is_empty());
+        // A stream that went whole when foveation lost stays whole until it saves RESUME_SAVING.
+        let dear = CostModel::default();
+        dear.record(&req(Preset::Balanced, 1), 100.0);
+        dear.record(&req(Preset::Full, 1), 100.0);
+        assert_eq!(whole_frames(&mut p, &dear, 2, 3), [1, 2, 3]);
+        assert_eq!(whole_frames(&mut p, &cost, 2, 10).len(), 10);
+        let cheap = CostModel::default();
+        cheap.record(&req(Preset::Balanced, 1), 100.0 * (0.99 - RESUME_SAVING));
+        cheap.record(&req(Preset::Full, 1), 100.0);
+        assert!(whole_frames(&mut p, &cheap, 2, 10).is_empty());
     }
 }
