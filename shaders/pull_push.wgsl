@@ -122,37 +122,25 @@ fn pixel_cell(p: vec2<i32>) -> Cell {
     return out;
 }
 
-// The exact merge of four children (some may be empty), W then clamped to 1.
-fn merge(ch: array<Cell, 4>) -> Cell {
+// The exact merge of four children (some may be empty), W then clamped to 1. Four named cells
+// rather than an array: a GPU compiler keeps an array indexed in a loop in slow per-thread
+// memory, and these run once per pyramid cell.
+fn merge(c0: Cell, c1: Cell, c2: Cell, c3: Cell) -> Cell {
     var out = empty_cell();
-    for (var i = 0; i < 4; i++) {
-        out.w += ch[i].w;
-        out.lo = min(out.lo, ch[i].lo);
-        out.hi = max(out.hi, ch[i].hi);
-    }
+    out.w = c0.w + c1.w + c2.w + c3.w;
+    out.lo = min(min(min(c0.lo, c1.lo), c2.lo), c3.lo);
+    out.hi = max(max(max(c0.hi, c1.hi), c2.hi), c3.hi);
     if (out.w <= 0.0) {
         return out;
     }
-    for (var i = 0; i < 4; i++) {
-        let k = ch[i].w / out.w;
-        out.mean += k * ch[i].mean;
-        out.depth += k * ch[i].depth;
-        out.material += k * ch[i].material;
-        out.c += k * ch[i].c;
-    }
-    for (var i = 0; i < 4; i++) {
-        if (ch[i].w <= 0.0) {
-            continue;
-        }
-        let k = ch[i].w / out.w;
-        out.depth_var += k * (ch[i].depth_var + (ch[i].depth - out.depth) * (ch[i].depth - out.depth));
-        out.material_var += k * (ch[i].material_var + (ch[i].material - out.material) * (ch[i].material - out.material));
-        let d = ch[i].mean - out.mean;
-        out.s += ch[i].s + ch[i].w * vec3<f32>(d.x * d.x, d.x * d.y, d.y * d.y);
-        let dc = ch[i].c - out.c;
-        out.tx += ch[i].tx + ch[i].w * d.x * dc;
-        out.ty += ch[i].ty + ch[i].w * d.y * dc;
-    }
+    add_means(&out, c0);
+    add_means(&out, c1);
+    add_means(&out, c2);
+    add_means(&out, c3);
+    add_spreads(&out, c0);
+    add_spreads(&out, c1);
+    add_spreads(&out, c2);
+    add_spreads(&out, c3);
     if (out.w > 1.0) {
         let k = 1.0 / out.w;
         out.w = 1.0;
@@ -163,38 +151,70 @@ fn merge(ch: array<Cell, 4>) -> Cell {
     return out;
 }
 
+// A child's share of the weighted means (`out.w` holds the children's total weight).
+fn add_means(out: ptr<function, Cell>, ch: Cell) {
+    let k = ch.w / (*out).w;
+    (*out).mean += k * ch.mean;
+    (*out).depth += k * ch.depth;
+    (*out).material += k * ch.material;
+    (*out).c += k * ch.c;
+}
+
+// A child's spreads about the merged means: depth and material variance, position scatter and
+// the position-colour cross terms.
+fn add_spreads(out: ptr<function, Cell>, ch: Cell) {
+    if (ch.w <= 0.0) {
+        return;
+    }
+    let k = ch.w / (*out).w;
+    let dz = ch.depth - (*out).depth;
+    (*out).depth_var += k * (ch.depth_var + dz * dz);
+    let dm = ch.material - (*out).material;
+    (*out).material_var += k * (ch.material_var + dm * dm);
+    let d = ch.mean - (*out).mean;
+    (*out).s += ch.s + ch.w * vec3<f32>(d.x * d.x, d.x * d.y, d.y * d.y);
+    let dc = ch.c - (*out).c;
+    (*out).tx += ch.tx + ch.w * d.x * dc;
+    (*out).ty += ch.ty + ch.w * d.y * dc;
+}
+
+// Pixel `i` (0..3, row-major) of level 1's cell `id`, or an empty cell past the frame.
+fn child_pixel(id: vec2<u32>, i: u32) -> Cell {
+    let p = vec2<i32>(2u * id + vec2<u32>(i & 1u, i >> 1u));
+    if (in_frame(p)) {
+        return pixel_cell(p);
+    }
+    return empty_cell();
+}
+
 // Pull, level 1 from the pixels.
 @compute @workgroup_size(8, 8)
 fn pull_pixels(@builtin(global_invocation_id) id: vec3<u32>) {
     if (any(id.xy >= level.size)) {
         return;
     }
-    var ch: array<Cell, 4>;
-    for (var i = 0u; i < 4u; i++) {
-        let p = vec2<i32>(2u * id.xy + vec2<u32>(i & 1u, i >> 1u));
-        ch[i] = empty_cell();
-        if (in_frame(p)) {
-            ch[i] = pixel_cell(p);
-        }
-    }
-    store_cell(level.offset + id.y * level.size.x + id.x, merge(ch));
+    let m = merge(child_pixel(id.xy, 0u), child_pixel(id.xy, 1u), child_pixel(id.xy, 2u), child_pixel(id.xy, 3u));
+    store_cell(level.offset + id.y * level.size.x + id.x, m);
 }
 
-// Pull, level l ≥ 2 from level l − 1 (`child_offset`, `parent_size` holds the child size).
+// Child `i` (0..3, row-major) of cell `id` one level down (`child_offset`, `parent_size`
+// holds the child level's size), or an empty cell past its border.
+fn child_cell(id: vec2<u32>, i: u32) -> Cell {
+    let q = 2u * id + vec2<u32>(i & 1u, i >> 1u);
+    if (all(q < level.parent_size)) {
+        return load_cell(level.child_offset + q.y * level.parent_size.x + q.x);
+    }
+    return empty_cell();
+}
+
+// Pull, level l ≥ 2 from level l − 1.
 @compute @workgroup_size(8, 8)
 fn pull(@builtin(global_invocation_id) id: vec3<u32>) {
     if (any(id.xy >= level.size)) {
         return;
     }
-    var ch: array<Cell, 4>;
-    for (var i = 0u; i < 4u; i++) {
-        let q = 2u * id.xy + vec2<u32>(i & 1u, i >> 1u);
-        ch[i] = empty_cell();
-        if (all(q < level.parent_size)) {
-            ch[i] = load_cell(level.child_offset + q.y * level.parent_size.x + q.x);
-        }
-    }
-    store_cell(level.offset + id.y * level.size.x + id.x, merge(ch));
+    let m = merge(child_cell(id.xy, 0u), child_cell(id.xy, 1u), child_cell(id.xy, 2u), child_cell(id.xy, 3u));
+    store_cell(level.offset + id.y * level.size.x + id.x, m);
 }
 
 // What a parent lends its children: its plane, depth, sample range, and its centre (pixels).
