@@ -103,6 +103,12 @@ impl Renderer {
         self.gpu.summary()
     }
 
+    /// Whether the adapter is a CPU one (lavapipe, llvmpipe): what shares the CPU with it slows
+    /// its renders.
+    pub fn is_software(&self) -> bool {
+        self.gpu.info.device_type == wgpu::DeviceType::Cpu
+    }
+
     /// Whether per-pass GPU times are measured (timestamp queries).
     pub fn timestamps(&self) -> bool {
         self.timer.enabled()
