@@ -49,11 +49,22 @@ pub(super) fn log_flip_chart<'a, DB: DrawingBackend>(
         .y_desc(y_desc)
         .axis_desc_style(("sans-serif", 15))
         .label_style(("sans-serif", 13))
-        .x_label_formatter(&|v| format!("{v:.0}"))
+        .x_label_formatter(&|v| tick_label(*v))
         .y_label_formatter(&|v| format!("{v:.3}"))
         .draw()
         .map_err(err)?;
     Ok(chart)
+}
+
+/// A log axis's 1-2-5 key point as text: whole numbers from 1 up, else to three decimals (a
+/// GPU's frames take fractions of a millisecond, which `{:.0}` printed as "0").
+fn tick_label(v: f64) -> String {
+    if v >= 1.0 {
+        format!("{v:.0}")
+    } else {
+        let s = format!("{v:.3}");
+        s.trim_end_matches('0').to_string()
+    }
 }
 
 /// One configuration's medians.
@@ -260,5 +271,19 @@ impl Plot for BenchPlot {
         }
         legend(&mut chart, SeriesLabelPosition::UpperRight)?;
         Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::tick_label;
+
+    #[test]
+    fn ticks_below_one_keep_their_digits() {
+        let labels: Vec<String> = [0.05, 0.1, 0.2, 0.5, 1.0, 2.0, 500.0, 2000.0]
+            .into_iter()
+            .map(tick_label)
+            .collect();
+        assert_eq!(labels, ["0.05", "0.1", "0.2", "0.5", "1", "2", "500", "2000"]);
     }
 }
