@@ -284,6 +284,9 @@ mod tests {
             .into_iter()
             .map(tick_label)
             .collect();
-        assert_eq!(labels, ["0.05", "0.1", "0.2", "0.5", "1", "2", "500", "2000"]);
+        assert_eq!(
+            labels,
+            ["0.05", "0.1", "0.2", "0.5", "1", "2", "500", "2000"]
+        );
     }
 }

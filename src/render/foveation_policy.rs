@@ -24,11 +24,19 @@ pub const PROBE_EVERY: u64 = 64;
 /// every frame (they did at 160×120 on `gallery`, where the two cost within 10%).
 pub const RESUME_SAVING: f64 = 0.15;
 
-/// Per stream, how many foveated frames it has asked for, and whether the last verdict was
-/// that foveation does not pay (logged when that changes, not per frame).
+/// A stream's state: foveated frames asked for, whether the last verdict was that foveation
+/// does not pay (logged when that changes, not per frame), and the frame of that change.
+#[derive(Debug, Default)]
+struct Stream {
+    frames: u64,
+    losing: bool,
+    switched_at: Option<u64>,
+}
+
+/// Per stream, its [`Stream`] state.
 #[derive(Debug, Default)]
 pub struct FoveationPolicy {
-    frames: HashMap<u64, (u64, bool)>,
+    streams: HashMap<u64, Stream>,
 }
 
 impl FoveationPolicy {
@@ -38,16 +46,25 @@ impl FoveationPolicy {
         if !req.settings.foveation.enabled {
             return None;
         }
-        let (n, losing) = self.frames.entry(req.stream).or_default();
-        *n += 1;
-        let probe = *n % PROBE_EVERY == 0;
+        let s = self.streams.entry(req.stream).or_default();
+        s.frames += 1;
+        let probe = s.frames % PROBE_EVERY == 0;
         let verdict = cost.foveation_verdict(req);
-        if let Some(v) = verdict {
-            let need = if *losing { RESUME_SAVING } else { WORTH_SAVING };
-            if v.saves(need) == *losing {
-                *losing = !*losing;
+        // A stream keeps a choice PROBE_EVERY frames before it may change it again: on a GPU
+        // frames take a few ms and one frame's noise moves the estimates by more than
+        // RESUME_SAVING (an H200 switched five times in 200 ms without this).
+        let settled = s.switched_at.is_none_or(|at| s.frames - at >= PROBE_EVERY);
+        if let Some(v) = verdict.filter(|_| settled) {
+            let need = if s.losing {
+                RESUME_SAVING
+            } else {
+                WORTH_SAVING
+            };
+            if v.saves(need) == s.losing {
+                s.losing = !s.losing;
+                s.switched_at = Some(s.frames);
                 let (stream, scene) = (req.stream, &req.scene);
-                let now = if *losing {
+                let now = if s.losing {
                     "shading whole"
                 } else {
                     "foveating"
@@ -60,7 +77,7 @@ impl FoveationPolicy {
                 "shaded whole once to measure what foveation saves on this scene".to_string()
             }
             None => return None,
-            Some(_) if !*losing || probe => return None,
+            Some(_) if !s.losing || probe => return None,
             Some(v) => format!("shaded whole: foveation does not pay here ({v})"),
         };
         req.settings.foveation.enabled = false;
@@ -69,7 +86,7 @@ impl FoveationPolicy {
 
     /// Forgets a stream that has ended.
     pub fn forget(&mut self, stream: u64) {
-        self.frames.remove(&stream);
+        self.streams.remove(&stream);
     }
 }
 
@@ -169,6 +186,38 @@ mod tests {
         let cheap = CostModel::default();
         cheap.record(&req(Preset::Balanced, 1), 100.0 * (0.99 - RESUME_SAVING));
         cheap.record(&req(Preset::Full, 1), 100.0);
+        // Stream 2 switched at its frame 1 and is at frame 13: it foveates again from frame
+        // 1 + PROBE_EVERY (this call's frame PROBE_EVERY - 12), the frame before being a probe.
+        let expected: Vec<u64> = (1..=PROBE_EVERY - 14).collect();
+        assert_eq!(whole_frames(&mut p, &cheap, 2, PROBE_EVERY), expected);
         assert!(whole_frames(&mut p, &cheap, 2, 10).is_empty());
+    }
+
+    #[test]
+    fn estimates_that_flip_every_frame_switch_a_stream_at_most_once_per_probe_interval() {
+        let (dear, cheap) = (CostModel::default(), CostModel::default());
+        for (model, foveated) in [(&dear, 100.0), (&cheap, 50.0)] {
+            model.record(&req(Preset::Balanced, 1), foveated);
+            model.record(&req(Preset::Full, 1), 100.0);
+        }
+        let mut p = FoveationPolicy::default();
+        let n = 4 * PROBE_EVERY;
+        let whole: Vec<bool> = (0..n)
+            .map(|i| {
+                let mut r = req(Preset::Balanced, 1);
+                p.apply(if i % 2 == 0 { &dear } else { &cheap }, &mut r)
+                    .is_some()
+            })
+            .collect();
+        let changes = whole.windows(2).filter(|w| w[0] != w[1]).count() as u64;
+        // At most one switch and one probe (two changes) in each interval.
+        assert!(
+            changes <= 3 * n / PROBE_EVERY,
+            "{changes} changes in {n} frames"
+        );
+        assert!(
+            whole.iter().any(|w| *w),
+            "the first verdict still applies at once"
+        );
     }
 }
