@@ -27,7 +27,9 @@ fn hello(w: u32, h: u32, preset: &str) -> Hello {
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn a_reference_4k_session_slows_only_itself() {
     let options = ServerOptions {
-        frame_budget: Duration::from_secs(600),
+        // Far over what a 4K reference frame costs here (627 s estimated on one 2-core
+        // machine, 28 s on another): this test is about the light session, not admission.
+        frame_budget: Duration::from_secs(7200),
         ..ServerOptions::default()
     };
     let (addr, server) = common::start_calibrated(options).await;

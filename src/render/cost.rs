@@ -201,8 +201,18 @@ pub fn measure_foveation(
     })
 }
 
-/// Frames timed per preset and size at start-up (after one that is not).
+/// Frames timed per preset and size at start-up (after one that is not), where foveation's
+/// verdict compares them; the reference, which only sizes admission and costs four times
+/// `full`, is timed once (its two more frames were a fifth of a lavapipe start-up).
 const CALIBRATION_FRAMES: usize = 3;
+
+fn calibration_frames(preset: Preset) -> usize {
+    if preset == Preset::Reference {
+        1
+    } else {
+        CALIBRATION_FRAMES
+    }
+}
 
 /// Renders frames of `scene` for each preset at two sizes so the first sessions' estimates come
 /// from this adapter (a first frame at each size builds pipelines and is not counted). Returns
@@ -216,12 +226,15 @@ pub fn calibrate(renderer: &mut Renderer, model: &CostModel, scene: &str) -> Vec
             stream,
             ..FrameRequest::new(scene, w, h)
         };
-        let (small, large) = (at(160, 120), at(480, 360));
+        // Four times the pixels apart: enough to split the fixed from the per-pixel part, and
+        // small enough that a 2-core lavapipe machine starts in well under a minute (480×360
+        // took 38 s on one; three instances starting together missed fleet.sh's minute).
+        let (small, large) = (at(160, 120), at(320, 240));
         // After a frame that builds pipelines and history, the median of a few: one frame of
         // a noisy machine decided whether a preset's foveation pays.
         let mut time = |req: &FrameRequest| -> Result<f64, RenderError> {
             renderer.render(req)?;
-            let timed: Result<Vec<f64>, RenderError> = (0..CALIBRATION_FRAMES)
+            let timed: Result<Vec<f64>, RenderError> = (0..calibration_frames(preset))
                 .map(|_| renderer.render(req).map(|f| f.render_ms))
                 .collect();
             Ok(median(timed?))

@@ -51,6 +51,15 @@ pub struct Server {
     pub url: String,
 }
 
+/// A test that fails (panics) still ends its server: a live one would slow every test after
+/// it (in one suite run, four browser tests' servers outlived them and later tests timed out).
+impl Drop for Server {
+    fn drop(&mut self) {
+        let _ = self.child.kill();
+        let _ = self.child.wait();
+    }
+}
+
 impl Server {
     /// Starts `fovea serve` with `args` on `port` (0: any) and waits for its listening line.
     pub fn start(port: u16, args: &[&str]) -> Server {
@@ -77,9 +86,16 @@ impl Server {
                 }
             }
         });
-        let url = rx
-            .recv_timeout(Duration::from_secs(60))
-            .expect("fovea serve listens within 60 s");
+        // A server that never listens is killed before the test fails, or it would run on
+        // and slow every test after it.
+        let url = match rx.recv_timeout(Duration::from_secs(60)) {
+            Ok(url) => url,
+            Err(e) => {
+                let _ = child.kill();
+                let _ = child.wait();
+                panic!("fovea serve listens within 60 s: {e}");
+            }
+        };
         Server { child, url }
     }
 
