@@ -86,17 +86,15 @@ impl Server {
                 }
             }
         });
-        // A server that never listens is killed before the test fails, or it would run on
-        // and slow every test after it.
-        let url = match rx.recv_timeout(Duration::from_secs(60)) {
-            Ok(url) => url,
-            Err(e) => {
-                let _ = child.kill();
-                let _ = child.wait();
-                panic!("fovea serve listens within 60 s: {e}");
-            }
+        // Held as a Server before it listens, so one that never does is ended by Drop.
+        let mut server = Server {
+            child,
+            url: String::new(),
         };
-        Server { child, url }
+        server.url = rx
+            .recv_timeout(Duration::from_secs(60))
+            .expect("fovea serve listens within 60 s");
+        server
     }
 
     pub fn port(&self) -> u16 {
