@@ -22,6 +22,7 @@ fn the_codec_sweep_measures_every_configuration_on_the_same_frames() {
         configs: codec_configs(),
         display: Display::default(),
         pictures: Some(dir.join("codecs")),
+        orbit_deg_per_s: 0.0,
     };
     let report = run_codecs(
         &mut renderer,
@@ -157,4 +158,58 @@ fn the_codec_sweep_asks_for_a_gaze_path_and_one_scene() {
         "100000",
     ]);
     assert!(e.contains("no gaze"), "{e}");
+    let e = run(&["--gaze-file", gaze, "--orbit-deg-per-s", "400"]);
+    assert!(e.contains("--orbit-deg-per-s"), "{e}");
+    // A filter that names nothing says which names there are.
+    let e = run(&[
+        "--gaze-file",
+        gaze,
+        "--screen",
+        "1920x1200",
+        "--only",
+        "vp9",
+    ]);
+    assert!(
+        e.contains("--only vp9") && e.contains("H.264 4000 kbit/s"),
+        "{e}"
+    );
+}
+
+/// A turning camera changes the whole picture every frame, so an H.264 stream's P-frames cost
+/// more than with the camera still on the same gaze; the report says it turned.
+#[test]
+fn an_orbiting_camera_changes_what_the_encoder_sees() {
+    let mut renderer = Renderer::new().unwrap_or_else(|e| panic!("GPU tests need an adapter: {e}"));
+    let h264 = codec_configs()
+        .into_iter()
+        .filter(|c| c.name == "H.264 4000 kbit/s")
+        .collect::<Vec<_>>();
+    assert_eq!(h264.len(), 1);
+    let run = |renderer: &mut Renderer, orbit_deg_per_s: f64| {
+        let opts = CodecOptions {
+            scene: "gallery".into(),
+            width: 160,
+            height: 120,
+            path: vec![[0.5, 0.5]; 4],
+            recording: "a still gaze".into(),
+            configs: h264.clone(),
+            display: Display::default(),
+            pictures: None,
+            orbit_deg_per_s,
+        };
+        run_codecs(renderer, &opts, &AtomicBool::new(false), &mut |_, _, _| {})
+            .expect("the sweep runs")
+    };
+    let still = run(&mut renderer, 0.0);
+    // 3° a frame: a fast drag.
+    let turning = run(&mut renderer, 180.0);
+    let (a, b) = (&still.rows[0], &turning.rows[0]);
+    assert!(
+        b.bytes.median > 2.0 * a.bytes.median,
+        "P-frames still {} bytes, turning {}",
+        a.bytes.median,
+        b.bytes.median
+    );
+    assert!(turning.markdown().contains("the camera orbiting 180°/s"));
+    assert!(!still.markdown().contains("orbiting"));
 }

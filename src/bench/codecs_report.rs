@@ -75,6 +75,9 @@ pub struct CodecReport {
     pub width: u32,
     pub height: u32,
     pub recording: String,
+    /// The camera's turn rate (0: still); reports from before it existed read as still.
+    #[serde(default)]
+    pub orbit_deg_per_s: f64,
     pub frames: usize,
     pub fps: f64,
     pub seconds: f64,
@@ -156,13 +159,18 @@ impl CodecReport {
 
     pub fn markdown(&self) -> String {
         let mut s = format!(
-            "# Codecs on {} ({}) at {}×{}, {} frames along {} ({} fps)\n\n{} · {} CPUs · {:.0} s{}\n\n",
+            "# Codecs on {} ({}) at {}×{}, {} frames along {}{} ({} fps)\n\n{} · {} CPUs · {:.0} s{}\n\n",
             self.scene,
             self.preset,
             self.width,
             self.height,
             self.frames,
             self.recording,
+            if self.orbit_deg_per_s != 0.0 {
+                format!(", the camera orbiting {}°/s", self.orbit_deg_per_s)
+            } else {
+                String::new()
+            },
             self.fps,
             self.machine.adapter,
             self.machine.cpus,

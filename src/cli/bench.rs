@@ -26,8 +26,9 @@ pub struct BenchArgs {
     #[arg(long)]
     pub moving: bool,
     /// Configurations: presets, rungs, knobs, or a comma-separated list of names from knobs.
-    /// `codecs` compares the encoders instead (JPEG q50–95, H.264 500–8000 kbit/s, each plain
-    /// and low-passed, JPEG with a 20° inset) on frames rendered along --gaze-file: one scene,
+    /// `codecs` compares the encoders instead (JPEG q50–95, H.264 500–8000 kbit/s, each plain,
+    /// low-passed and with 20° and 16° insets, JPEG with a 13.3° one) on frames rendered along
+    /// --gaze-file (and --orbit-deg-per-s): one scene,
     /// one size, --frames frames at 60 fps; writes codecs.json, codecs.md, codecs.svg.
     #[arg(long, default_value = "knobs")]
     pub sweep: String,
@@ -68,6 +69,15 @@ pub struct BenchArgs {
     /// (and the lossless frame) to OUT/codecs/*.png.
     #[arg(long)]
     pub pictures: bool,
+    /// `--sweep codecs`: turn the camera about its target at this many degrees per second (as
+    /// a viewer dragging the view), so the periphery changes every frame; 0 keeps it still.
+    #[arg(long, default_value_t = 0.0, allow_negative_numbers = true)]
+    pub orbit_deg_per_s: f64,
+    /// `--sweep codecs`: only the configurations whose names contain one of these
+    /// comma-separated words (case-insensitive; e.g. "h.264" or "inset 16"). JPEG q85, which
+    /// every family is matched to, is always measured.
+    #[arg(long)]
+    pub only: Option<String>,
     #[command(flatten, next_help_heading = "Reading --gaze-file")]
     pub read: super::gaze::ReadArgs,
 }

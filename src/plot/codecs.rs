@@ -37,8 +37,16 @@ impl CodecPlot {
         }
         CodecPlot {
             title: format!(
-                "Bitrate vs foveal quality: {} at {}×{}, {} frames of recorded gaze",
-                r.scene, r.width, r.height, r.frames
+                "Bitrate vs foveal quality: {} at {}×{}, {} frames of recorded gaze{}",
+                r.scene,
+                r.width,
+                r.height,
+                r.frames,
+                if r.orbit_deg_per_s != 0.0 {
+                    format!(", camera orbiting {}°/s", r.orbit_deg_per_s)
+                } else {
+                    String::new()
+                }
             ),
             families,
             target: r
