@@ -1,7 +1,7 @@
 //! H.264 for one session: an openh264 encoder that outputs every frame at once (no B-frames,
 //! no frame skipping, no reordering: a browser's WebCodecs decoder shows each frame as it
 //! arrives), a keyframe at the start, on request, after a size change and every
-//! `keyframe_every`, constant bitrate.
+//! `keyframe_every`, and the bitrate held by a quantiser range that `rate_guard` picks.
 //!
 //! Frames are converted from RGBA by `encode::yuv` (BT.601 full range, rounded; openh264's own
 //! converter truncates, which FLIP counts) and the
@@ -25,11 +25,9 @@ enum Picture<'a> {
     I420(&'a [u8]),
 }
 
-/// The quantiser's range (H.264: 0 finest … 51 coarsest). The bitrate target is met within it;
-/// past it, quality wins and the stream runs over the target.
-pub const MIN_QP: u8 = 10;
-pub const MAX_QP: u8 = 22;
 use openh264::{OpenH264API, Timestamp};
+
+use super::rate_guard::{RateGuard, Switch};
 
 use super::EncodeError;
 
@@ -109,6 +107,8 @@ pub struct H264Stream {
     yuv: Option<I420>,
     /// Inset sessions: where the previous picture's inset lay (`inset_packed::follow`).
     inset: Option<super::inset::InsetPlan>,
+    /// The quantiser's range: quality while the picture is still, the target once it moves.
+    guard: RateGuard,
 }
 
 /// One encoded frame: Annex B NAL units.
@@ -140,6 +140,7 @@ impl H264Stream {
             last_ms: 0,
             yuv: None,
             inset: None,
+            guard: RateGuard::default(),
         }
     }
 
@@ -181,13 +182,20 @@ impl H264Stream {
                 .profile(Profile::Baseline)
                 .sps_pps_strategy(SpsPpsStrategy::ConstantId)
                 .skip_frames(false)
-                // Quality over the bitrate target: with the quantiser free to reach 51 and
-                // openh264's background detection on, a still camera's P-frames came out
+                // With openh264's background detection on, a still camera's P-frames came out
                 // 14 bytes long and never refined the keyframe (foveal FLIP 0.104 at
-                // 4000 kbit/s); QP ≤ 22 without background detection or adaptive quantisation
-                // reaches JPEG q85's foveal FLIP in ~5 kB P-frames (docs/encoding.md).
-                .qp(QpRange::new(MIN_QP, MAX_QP))
+                // 4000 kbit/s); without it or adaptive quantisation, QP ≤ 22 reaches JPEG
+                // q85's foveal FLIP in ~5 kB P-frames, and the guard frees the quantiser
+                // where the picture moves too much for that (`rate_guard`).
+                .qp(QpRange::new(
+                    super::rate_guard::QpCap::MIN_QP,
+                    self.guard.cap().max_qp(),
+                ))
                 .background_detection(false)
+                // Its scene-change detection sent a keyframe every 17 frames of a moving test
+                // picture once the quantiser was free; keyframes come when due, when asked
+                // for, and when the guard switches, and nowhere else.
+                .scene_change_detect(false)
                 .adaptive_quantization(false)
                 .num_threads(1)
                 // Full range, as `encode::yuv` converts: the decoder must know.
@@ -273,6 +281,21 @@ impl H264Stream {
             Picture::Rgba(rgba) => yuv.fill(rgba),
             Picture::I420(planes) => yuv.copy_from(planes),
         }
+        // Strictly increasing, as rate control expects.
+        let ms = ms.max(self.last_ms + 1);
+        let since_last = ms - self.last_ms;
+        self.last_ms = ms;
+        if let Switch::To(cap) = self
+            .guard
+            .decide(f64::from(self.config.kbps), due || self.keyframe_asked)
+        {
+            tracing::debug!(
+                ?cap,
+                kbps = self.config.kbps,
+                "H.264 quantiser range switched"
+            );
+            self.encoder = None;
+        }
         self.ensure_encoder(width, height)?;
         let ask = self.keyframe_asked || due;
         let Some(encoder) = self.encoder.as_mut() else {
@@ -281,9 +304,6 @@ impl H264Stream {
         if ask {
             encoder.force_intra_frame();
         }
-        // Strictly increasing, as rate control expects.
-        let ms = ms.max(self.last_ms + 1);
-        self.last_ms = ms;
         let Some(yuv) = self.yuv.as_ref() else {
             return Err(EncodeError::H264("no picture buffer".into()));
         };
@@ -304,6 +324,7 @@ impl H264Stream {
             self.last_keyframe = Some(now);
             self.keyframe_asked = false;
         }
+        self.guard.record(bytes.len(), keyframe, since_last);
         Ok(H264Frame { bytes, keyframe })
     }
 }

@@ -5,6 +5,7 @@ pub mod foveated;
 pub mod h264;
 pub mod inset;
 pub mod inset_packed;
+pub mod rate_guard;
 pub mod yuv;
 
 use crate::protocol::Codec;
