@@ -157,6 +157,15 @@ impl CodecReport {
         }
     }
 
+    /// ", the camera orbiting N°/s" where it turned, else nothing: for titles.
+    pub fn camera_note(&self) -> String {
+        if self.orbit_deg_per_s != 0.0 {
+            format!(", the camera orbiting {}°/s", self.orbit_deg_per_s)
+        } else {
+            String::new()
+        }
+    }
+
     pub fn markdown(&self) -> String {
         let mut s = format!(
             "# Codecs on {} ({}) at {}×{}, {} frames along {}{} ({} fps)\n\n{} · {} CPUs · {:.0} s{}\n\n",
@@ -166,11 +175,7 @@ impl CodecReport {
             self.height,
             self.frames,
             self.recording,
-            if self.orbit_deg_per_s != 0.0 {
-                format!(", the camera orbiting {}°/s", self.orbit_deg_per_s)
-            } else {
-                String::new()
-            },
+            self.camera_note(),
             self.fps,
             self.machine.adapter,
             self.machine.cpus,

@@ -42,11 +42,7 @@ impl CodecPlot {
                 r.width,
                 r.height,
                 r.frames,
-                if r.orbit_deg_per_s != 0.0 {
-                    format!(", camera orbiting {}°/s", r.orbit_deg_per_s)
-                } else {
-                    String::new()
-                }
+                r.camera_note()
             ),
             families,
             target: r
