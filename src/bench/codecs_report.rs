@@ -186,7 +186,7 @@ impl CodecReport {
                 ""
             }
         );
-        s.push_str("FLIP against the lossless frame; foveal = within 5° of each frame's gaze. Bytes per frame exclude the H.264 keyframe; kbit/s adds one every 2 s.\n\n");
+        s.push_str("FLIP against the lossless frame; foveal = within 5° of each frame's gaze. Bytes per frame exclude the H.264 stream's first keyframe (a later one, where the rate guard switched ranges, counts as a frame); kbit/s adds one every 2 s.\n\n");
         s.push_str("| configuration | bytes/frame (median) | H.264 keyframe bytes | kbit/s at 60 fps | foveal FLIP | whole-frame FLIP | encode ms (median) |\n|---|---:|---:|---:|---:|---:|---:|\n");
         for r in &self.rows {
             let key = r.keyframe_bytes.map_or("–".into(), |k| format!("{k:.0}"));
