@@ -50,7 +50,7 @@ impl QpCap {
     }
 }
 
-/// P-frames averaged to decide.
+/// The P-frames whose median rate decides.
 pub const WINDOW: usize = 6;
 /// Quality → target above this many times the target rate.
 pub const OVER: f64 = 2.0;
