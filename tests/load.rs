@@ -281,8 +281,11 @@ async fn three_sessions_share_the_renderer_fairly() {
     // One frame in the render queue per session at a time: nobody starves.
     assert!(
         report.fairness > 0.6,
-        "fps per session {:?}",
-        report.fps_per_session
+        "fps per session {:?}, frames a second {:?}, reconnects {}, render {:?}",
+        report.fps_per_session,
+        report.fps_timeline,
+        report.reconnects,
+        report.stages_ms.get("render")
     );
     shutdown.stop().await;
 }

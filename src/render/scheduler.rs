@@ -186,6 +186,7 @@ impl Scheduler {
             h = task.request.height
         );
         let _enter = span.enter();
+        let cold = task.going.is_none() && !self.warm.contains(&kind(&task.request));
         let renderer = &mut self.renderer;
         let outcome = match task.going.as_mut() {
             None => guarded(|| renderer.begin(&task.request, slices)).map(|p| match p {
@@ -202,7 +203,11 @@ impl Scheduler {
             Some(g) => guarded(|| renderer.step(&mut g.frame)),
         };
         let ms = begun.elapsed().as_secs_f64() * 1e3;
-        self.turns.charge(stream, ms);
+        if cold {
+            self.turns.charge_cold(stream, ms);
+        } else {
+            self.turns.charge(stream, ms);
+        }
         let task = &mut self.tasks[i];
         if let Some(g) = task.going.as_mut() {
             g.spent_ms += ms;
@@ -218,11 +223,8 @@ impl Scheduler {
         let mut restart = false;
         let result = match outcome {
             Ok(Some(mut frame)) => {
-                let r = &task.request;
-                let foveated = r.settings.foveation.enabled;
-                let kind = (r.stream, r.scene.clone(), r.width, r.height, foveated);
-                if !self.warm.insert(kind) {
-                    self.cost.record(r, spent);
+                if !self.warm.insert(kind(&task.request)) {
+                    self.cost.record(&task.request, spent);
                 }
                 frame.unfoveated = task.unfoveated.clone();
                 self.health.frame_ok();
@@ -265,6 +267,12 @@ impl Scheduler {
 }
 
 /// A panic inside the driver stack must not take every session down with it.
+/// What makes a frame cold when a stream renders it for the first time (see `Scheduler::warm`).
+fn kind(r: &FrameRequest) -> (u64, String, u32, u32, bool) {
+    let foveated = r.settings.foveation.enabled;
+    (r.stream, r.scene.clone(), r.width, r.height, foveated)
+}
+
 fn guarded<T>(f: impl FnOnce() -> Result<T, RenderError>) -> Result<T, RenderError> {
     std::panic::catch_unwind(AssertUnwindSafe(f)).unwrap_or_else(|panic| {
         let what = panic
