@@ -79,15 +79,19 @@ pub fn level_map(
             )
         })
         .collect();
-    let mut out = Vec::with_capacity((width * height) as usize);
-    for y in 0..height {
+    // Row by row, cell by cell: the four corners are read once per cell row, not per pixel.
+    let mut out = vec![0.0f32; (width * height) as usize];
+    for (y, row) in (0..height).zip(out.chunks_exact_mut(width as usize)) {
         let (j, fy) = (y / CELL, (y % CELL) as f32 / CELL as f32);
-        for x in 0..width {
-            let (i, fx) = (x / CELL, (x % CELL) as f32 / CELL as f32);
-            let g = |di: u32, dj: u32| grid[((j + dj) * gw + i + di) as usize];
-            let top = g(0, 0) + (g(1, 0) - g(0, 0)) * fx;
-            let bottom = g(0, 1) + (g(1, 1) - g(0, 1)) * fx;
-            out.push(top + (bottom - top) * fy);
+        let (above, below) = (&grid[(j * gw) as usize..], &grid[((j + 1) * gw) as usize..]);
+        for (i, cell) in row.chunks_mut(CELL as usize).enumerate() {
+            let (g00, g10, g01, g11) = (above[i], above[i + 1], below[i], below[i + 1]);
+            for (dx, v) in cell.iter_mut().enumerate() {
+                let fx = dx as f32 / CELL as f32;
+                let top = g00 + (g10 - g00) * fx;
+                let bottom = g01 + (g11 - g01) * fx;
+                *v = top + (bottom - top) * fy;
+            }
         }
     }
     out
@@ -110,28 +114,38 @@ impl Level {
 /// below (rounded up; edge pixels repeat). Level 1 is averaged straight from the bytes: the
 /// frame itself is never copied to floats.
 fn pyramid(rgba: &[u8], width: u32, height: u32) -> Vec<Level> {
-    let byte = |x: u32, y: u32| -> [f32; 3] {
-        let i = ((y * width + x) * 4) as usize;
-        [
-            f32::from(rgba[i]),
-            f32::from(rgba[i + 1]),
-            f32::from(rgba[i + 2]),
-        ]
-    };
     let mut levels: Vec<Level> = Vec::with_capacity(MAX_LEVEL);
-    for _ in 0..MAX_LEVEL {
-        let (pw, ph) = levels.last().map_or((width, height), |l| (l.w, l.h));
-        let below = |x: u32, y: u32| match levels.last() {
-            Some(l) => l.at(x, y),
-            None => byte(x, y),
-        };
+    let (w, h) = (width.div_ceil(2), height.div_ceil(2));
+    let stride = (width * 4) as usize;
+    let mut rgb = Vec::with_capacity((w * h) as usize);
+    for y in 0..h {
+        let (y0, y1) = ((2 * y) as usize, (2 * y + 1).min(height - 1) as usize);
+        let (r0, r1) = (
+            &rgba[y0 * stride..][..stride],
+            &rgba[y1 * stride..][..stride],
+        );
+        for x in 0..w {
+            let (x0, x1) = ((8 * x) as usize, ((2 * x + 1).min(width - 1) * 4) as usize);
+            rgb.push(std::array::from_fn(|k| {
+                let (a, b) = (f32::from(r0[x0 + k]), f32::from(r0[x1 + k]));
+                let (c, d) = (f32::from(r1[x0 + k]), f32::from(r1[x1 + k]));
+                0.25 * (a + b + c + d)
+            }));
+        }
+    }
+    levels.push(Level { rgb, w, h });
+    while levels.len() < MAX_LEVEL {
+        let Some(below) = levels.last() else { break };
+        let (pw, ph) = (below.w, below.h);
         let (w, h) = (pw.div_ceil(2), ph.div_ceil(2));
         let mut rgb = Vec::with_capacity((w * h) as usize);
         for y in 0..h {
-            let (y0, y1) = (2 * y, (2 * y + 1).min(ph - 1));
+            let (y0, y1) = ((2 * y) as usize, (2 * y + 1).min(ph - 1) as usize);
+            let r0 = &below.rgb[y0 * pw as usize..][..pw as usize];
+            let r1 = &below.rgb[y1 * pw as usize..][..pw as usize];
             for x in 0..w {
-                let (x0, x1) = (2 * x, (2 * x + 1).min(pw - 1));
-                let (a, b, c, d) = (below(x0, y0), below(x1, y0), below(x0, y1), below(x1, y1));
+                let (x0, x1) = ((2 * x) as usize, (2 * x + 1).min(pw - 1) as usize);
+                let (a, b, c, d) = (r0[x0], r0[x1], r1[x0], r1[x1]);
                 rgb.push(std::array::from_fn(|k| 0.25 * (a[k] + b[k] + c[k] + d[k])));
             }
         }
@@ -148,6 +162,13 @@ fn tap(x: u32, k: usize, n: u32) -> (u32, u32, f32) {
     let f = ((x as f32 + 0.5) / s - 0.5).clamp(0.0, (n - 1) as f32);
     let i0 = f as u32;
     (i0, (i0 + 1).min(n - 1), f - i0 as f32)
+}
+
+/// A level's row (already interpolated vertically) read at a horizontal tap.
+#[inline(always)]
+fn sample(row: &[[f32; 3]], (x0, x1, tx): (u32, u32, f32)) -> [f32; 3] {
+    let (a, b) = (row[x0 as usize], row[x1 as usize]);
+    std::array::from_fn(|c| a[c] + (b[c] - a[c]) * tx)
 }
 
 /// The frame low-passed by eccentricity around `gaze` (normalised). Pixels whose level is 0
@@ -195,32 +216,28 @@ pub fn low_pass(
                 *v = std::array::from_fn(|c| a[c] + (b[c] - a[c]) * ty);
             }
         }
-        let read = |k: usize, x: u32| -> [f32; 3] {
-            if k == 0 {
-                let i = ((y * width + x) * 4) as usize;
-                return std::array::from_fn(|c| f32::from(rgba[i + c]));
-            }
-            let (x0, x1, tx) = xtaps[k - 1][x as usize];
-            let (a, b) = (rows[k - 1][x0 as usize], rows[k - 1][x1 as usize]);
-            std::array::from_fn(|c| a[c] + (b[c] - a[c]) * tx)
-        };
-        for (x, &l) in row_levels.iter().enumerate() {
+        let stride = (width * 4) as usize;
+        let src = &rgba[y as usize * stride..][..stride];
+        let dst = &mut out[y as usize * stride..][..stride];
+        for (x, (&l, px)) in row_levels.iter().zip(dst.chunks_exact_mut(4)).enumerate() {
             if l <= 0.0 {
                 continue;
             }
             let k = (l as usize).min(MAX_LEVEL);
             let t = l - k as f32;
-            let a = read(k, x as u32);
+            let a = match k {
+                0 => std::array::from_fn(|c| f32::from(src[4 * x + c])),
+                _ => sample(&rows[k - 1], xtaps[k - 1][x]),
+            };
             let b = if t > 0.0 && k < MAX_LEVEL {
-                read(k + 1, x as u32)
+                sample(&rows[k], xtaps[k][x])
             } else {
                 a
             };
-            let i = (y * width) as usize * 4 + x * 4;
             for c in 0..3 {
                 // `as u8` saturates (and sends NaN to 0); + 0.5 rounds the non-negative blend
                 // without a libm call per channel.
-                out[i + c] = (a[c] + (b[c] - a[c]) * t + 0.5) as u8;
+                px[c] = (a[c] + (b[c] - a[c]) * t + 0.5) as u8;
             }
         }
     }
