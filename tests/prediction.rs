@@ -283,6 +283,8 @@ fn after_a_gap_a_fast_slowing_eye_is_followed_and_not_overshot() {
     let x = |tau: f64| 0.35 + (0.3 * tau - 0.005 * tau * tau) / 40.0;
     for tau in 0..8 {
         p.push(300.0 + f64::from(tau), [x(f64::from(tau)), 0.5]);
+        // Followed from its first velocity (the second sample): no sample spent confirming.
+        assert_eq!(p.in_saccade(), tau >= 1, "after sample {tau}");
     }
     assert!(p.in_saccade());
     let last = x(7.0);

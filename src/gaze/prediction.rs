@@ -23,8 +23,8 @@
 //!
 //! History is dropped at a gap (samples more than `MAX_SAMPLE_GAP_MS` apart, or more than
 //! four typical intervals): after track loss the eye is somewhere new. A saccade confirmed
-//! within `POST_GAP_MS` of the gap whose speed reaches `post_gap_onset_deg_s` is a post-gap
-//! movement instead: after a blink the eye is often found already moving, its onset unseen,
+//! within `POST_GAP_MS` of the gap whose speed reaches `post_gap_onset_deg_s` (on one sample,
+//! not `confirm`) is a post-gap movement instead: after a blink the eye is often found already moving, its onset unseen,
 //! and such movements run slower and longer than the main sequence says (on the shipped
 //! recordings, 150–400°/s for 30–40 ms). It is extrapolated kinematically: a
 //! position-velocity-acceleration fit over `post_gap_fit_ms`, moved on at the fitted
@@ -363,7 +363,10 @@ impl Predictor {
         self.fast_run += 1;
         let t_now = self.history.back().map_or(0.0, |(t, _)| *t);
         let after_gap = self.resumed_ms.is_some_and(|t0| t_now - t0 <= POST_GAP_MS);
-        if self.fast_run >= tuning.confirm {
+        // Right after a gap a movement already at post-gap speed needs no second sample: its
+        // onset went unseen and every sample spent confirming it is a sample held behind it.
+        let fast_after_gap = after_gap && speed >= tuning.post_gap_onset_deg_s;
+        if self.fast_run >= tuning.confirm || fast_after_gap {
             if let Some(onset) = self.candidate_onset {
                 self.saccade = Some(Saccade {
                     onset,
