@@ -176,7 +176,7 @@ fn sample(row: &[[f32; 3]], (x0, x1, tx): (u32, u32, f32)) -> [f32; 3] {
 ///
 /// Row by row: each level a row needs is first interpolated vertically into a row buffer, so a
 /// pixel costs two horizontal reads per level, not a full bilinear lookup (this more than
-/// halved the filter's time at 720p: docs/encoding.md).
+/// halved the filter's time at 720p; docs/encoding.md, "What encoding costs the CPU").
 pub fn low_pass(
     rgba: &[u8],
     width: u32,
