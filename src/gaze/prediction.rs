@@ -24,9 +24,9 @@
 //! History is dropped at a gap (samples more than `MAX_SAMPLE_GAP_MS` apart, or more than
 //! four typical intervals): after track loss the eye is somewhere new. A saccade confirmed
 //! within `POST_GAP_MS` of the gap whose speed reaches `post_gap_onset_deg_s` (on one sample,
-//! not `confirm`) is a post-gap movement instead: after a blink the eye is often found already moving, its onset unseen,
-//! and such movements run slower and longer than the main sequence says (on the shipped
-//! recordings, 150–400°/s for 30–40 ms). It is extrapolated kinematically: a
+//! not `confirm`) is a post-gap movement instead: after a blink the eye is often found already
+//! moving, its onset unseen, and such movements run slower and longer than the main sequence
+//! says (on the shipped recordings, 150–400°/s for 30–40 ms). It is extrapolated kinematically: a
 //! position-velocity-acceleration fit over `post_gap_fit_ms`, moved on at the fitted
 //! deceleration until it stops (never accelerated), by `post_gap_gain` of that travel (the
 //! fit is noisy, and a shrunk guess loses less when the eye stops early). It is not learned

@@ -266,13 +266,13 @@ impl Scheduler {
     }
 }
 
-/// A panic inside the driver stack must not take every session down with it.
 /// What makes a frame cold when a stream renders it for the first time (see `Scheduler::warm`).
 fn kind(r: &FrameRequest) -> (u64, String, u32, u32, bool) {
     let foveated = r.settings.foveation.enabled;
     (r.stream, r.scene.clone(), r.width, r.height, foveated)
 }
 
+/// A panic inside the driver stack must not take every session down with it.
 fn guarded<T>(f: impl FnOnce() -> Result<T, RenderError>) -> Result<T, RenderError> {
     std::panic::catch_unwind(AssertUnwindSafe(f)).unwrap_or_else(|panic| {
         let what = panic
