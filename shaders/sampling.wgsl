@@ -63,67 +63,116 @@ fn load_clamped(t: texture_2d<f32>, p: vec2<i32>) -> vec4<f32> {
 }
 
 // A Sobel tap of the albedo. Background (alpha 0) counts as black; the alpha holds the
-// material id, not coverage. The taps read the G-buffer directly: a workgroup tile shared
-// through a barrier measured 25% slower on the software adapter (a barrier splits the shader
-// into resumable pieces there), and a GPU's texture cache serves a 3×3 window anyway.
+// material id, not coverage.
 fn tap_albedo(q: vec2<i32>) -> vec4<f32> {
     let a = load_clamped(albedo_tex, q);
     return vec4<f32>(a.rgb * select(0.0, 1.0, a.a > 0.0), a.a);
 }
 
+// Sobel weights at column i, row j (0..2) of a 3×3 window.
+fn sobel_x(i: i32, j: i32) -> f32 {
+    return f32((i - 1) * (2 - abs(j - 1)));
+}
+
+fn sobel_y(i: i32, j: i32) -> f32 {
+    return f32((j - 1) * (2 - abs(i - 1)));
+}
+
+// One pixel's Sobel sums and albedo flatness while its 3×3 window is read.
+struct Edges {
+    gx_n: vec3<f32>,
+    gy_n: vec3<f32>,
+    gx_lab: vec3<f32>,
+    gy_lab: vec3<f32>,
+    first: vec4<f32>,
+    flat_albedo: bool,
+    one_material: bool,
+}
+
+fn edges() -> Edges {
+    return Edges(vec3<f32>(0.0), vec3<f32>(0.0), vec3<f32>(0.0), vec3<f32>(0.0), vec4<f32>(0.0), true, true);
+}
+
+// The texel at (i, j) of the pixel's window (outside 0..2: not in it).
+fn edges_tap(e: ptr<function, Edges>, n: vec3<f32>, a: vec4<f32>, i: i32, j: i32) {
+    if (i < 0 || i > 2 || j < 0 || j > 2) {
+        return;
+    }
+    (*e).gx_n += sobel_x(i, j) * n;
+    (*e).gy_n += sobel_y(i, j) * n;
+    if (i == 0 && j == 0) {
+        (*e).first = a;
+    } else if (any(a != (*e).first)) {
+        (*e).flat_albedo = false;
+        (*e).one_material = (*e).one_material && a.a == (*e).first.a;
+    }
+}
+
+fn edges_lab(e: ptr<function, Edges>, lab: vec3<f32>, i: i32, j: i32) {
+    if (i < 0 || i > 2 || j < 0 || j > 2) {
+        return;
+    }
+    (*e).gx_lab += sobel_x(i, j) * lab;
+    (*e).gy_lab += sobel_y(i, j) * lab;
+}
+
 // Largest per-pixel Sobel gradient of albedo (ΔE per pixel, /10) and normal (radians per
 // pixel, /0.25), each normalised to [0, 1]. Background counts as black with a zero normal, so
 // silhouettes are salient. CPU twin: optics::saliency::saliency.
-fn saliency(p: vec2<i32>) -> f32 {
-    let kx = array<f32, 9>(-1.0, 0.0, 1.0, -2.0, 0.0, 2.0, -1.0, 0.0, 1.0);
-    let ky = array<f32, 9>(-1.0, -2.0, -1.0, 0.0, 0.0, 0.0, 1.0, 2.0, 1.0);
-    var gx_n = vec3<f32>(0.0);
-    var gy_n = vec3<f32>(0.0);
-    var first = vec4<f32>(0.0);
-    var flat_albedo = true;
-    var one_material = true;
-    for (var j = 0; j < 3; j++) {
-        for (var i = 0; i < 3; i++) {
-            let q = p + vec2<i32>(i - 1, j - 1);
-            let n = load_clamped(normal_distance, q).xyz;
-            let k = j * 3 + i;
-            gx_n += kx[k] * n;
-            gy_n += ky[k] * n;
-            let a = tap_albedo(q);
-            if (k == 0) {
-                first = a;
-            } else if (any(a != first)) {
-                flat_albedo = false;
-                one_material = one_material && a.a == first.a;
-            }
-        }
-    }
+fn edges_saliency(e: Edges) -> f32 {
     var d_albedo = 0.0;
     // A demodulated reconstruction restores albedo edges within a material from the G-buffer,
     // so only a change of material (alpha: material id), where the ratio to the G-buffer's
-    // prediction jumps (an emitter beside a wall), is an edge. Otherwise Lab needs cube roots
-    // per tap: only worth it where the albedo actually changes.
+    // prediction jumps (an emitter beside a wall), is an edge.
     if (has_mode(MODE_DEMODULATED)) {
-        d_albedo = select(1.0, 0.0, one_material);
-    } else if (!flat_albedo) {
-        var gx_lab = vec3<f32>(0.0);
-        var gy_lab = vec3<f32>(0.0);
-        for (var j = 0; j < 3; j++) {
-            for (var i = 0; i < 3; i++) {
-                let lab = to_lab(tap_albedo(p + vec2<i32>(i - 1, j - 1)).rgb);
-                let k = j * 3 + i;
-                gx_lab += kx[k] * lab;
-                gy_lab += ky[k] * lab;
-            }
-        }
-        let d_lab = sqrt(gx_lab * gx_lab + gy_lab * gy_lab) / 8.0;
+        d_albedo = select(1.0, 0.0, e.one_material);
+    } else if (!e.flat_albedo) {
+        let d_lab = sqrt(e.gx_lab * e.gx_lab + e.gy_lab * e.gy_lab) / 8.0;
         // Normalisers: optics::saliency::{ALBEDO_FULL, NORMAL_FULL}.
         d_albedo = max(d_lab.x, max(d_lab.y, d_lab.z)) / 10.0;
     }
     // Sobel weights sum to 8 across the kernel: /8 gives a per-pixel derivative.
-    let d_n = sqrt(gx_n * gx_n + gy_n * gy_n) / 8.0;
+    let d_n = sqrt(e.gx_n * e.gx_n + e.gy_n * e.gy_n) / 8.0;
     let d_normal = max(d_n.x, max(d_n.y, d_n.z)) / 0.25;
     return clamp(max(d_albedo, d_normal), 0.0, 1.0);
+}
+
+// Saliency of the 2×2 pixels at `base` + (0|1, 0|1), in x, y, z, w order (0,0), (1,0), (0,1),
+// (1,1): the four 3×3 windows share one 4×4 window, so each G-buffer texel is read once for
+// all four (8 reads a pixel instead of 18; Lab's cube roots 4 a pixel instead of 9). Each
+// pixel's sums take its taps in the order a per-pixel loop would. The taps read the G-buffer
+// directly: a workgroup tile shared through a barrier measured 25% slower on the software
+// adapter (a barrier splits the shader into resumable pieces there).
+fn saliency_quad(base: vec2<i32>) -> vec4<f32> {
+    var e00 = edges();
+    var e10 = edges();
+    var e01 = edges();
+    var e11 = edges();
+    for (var r = 0; r < 4; r++) {
+        for (var c = 0; c < 4; c++) {
+            let q = base + vec2<i32>(c - 1, r - 1);
+            let n = load_clamped(normal_distance, q).xyz;
+            let a = tap_albedo(q);
+            edges_tap(&e00, n, a, c, r);
+            edges_tap(&e10, n, a, c - 1, r);
+            edges_tap(&e01, n, a, c, r - 1);
+            edges_tap(&e11, n, a, c - 1, r - 1);
+        }
+    }
+    // Lab needs cube roots per tap: only worth it where the albedo actually changes.
+    let flat = e00.flat_albedo && e10.flat_albedo && e01.flat_albedo && e11.flat_albedo;
+    if (!has_mode(MODE_DEMODULATED) && !flat) {
+        for (var r = 0; r < 4; r++) {
+            for (var c = 0; c < 4; c++) {
+                let lab = to_lab(tap_albedo(base + vec2<i32>(c - 1, r - 1)).rgb);
+                edges_lab(&e00, lab, c, r);
+                edges_lab(&e10, lab, c - 1, r);
+                edges_lab(&e01, lab, c, r - 1);
+                edges_lab(&e11, lab, c - 1, r - 1);
+            }
+        }
+    }
+    return vec4<f32>(edges_saliency(e00), edges_saliency(e10), edges_saliency(e01), edges_saliency(e11));
 }
 
 fn white_noise(p: vec2<u32>) -> f32 {
@@ -134,12 +183,43 @@ fn white_noise(p: vec2<u32>) -> f32 {
     return f32(h >> 8u) / 16777216.0;
 }
 
+// The acuity term of eq. 3 at pixel p: the probability before saliency, motion and DoF.
+fn acuity_at(p: vec2<i32>) -> f32 {
+    let e = eccentricity_deg(vec2<f32>(p) + 0.5);
+    return acuity_probability(frame.mar_slope * e + frame.mar_w0_deg);
+}
+
+// One invocation decides a 2×2 block of pixels, so their saliency shares its G-buffer reads.
 @compute @workgroup_size(8, 8)
 fn main(@builtin(global_invocation_id) id: vec3<u32>) {
-    let p = vec2<i32>(id.xy);
+    let base = vec2<i32>(id.xy) * 2;
+    if (!in_frame(base)) {
+        return;
+    }
+    let f = vec4<f32>(
+        acuity_at(base),
+        acuity_at(base + vec2<i32>(1, 0)),
+        acuity_at(base + vec2<i32>(0, 1)),
+        acuity_at(base + vec2<i32>(1, 1)),
+    );
+    // Saliency only matters where acuity alone does not already ask for every pixel.
+    var s = vec4<f32>(0.0);
+    if (has_mode(MODE_SALIENCY) && any(f < vec4<f32>(1.0))) {
+        s = saliency_quad(base);
+    }
+    decide(base, f.x, s.x);
+    decide(base + vec2<i32>(1, 0), f.y, s.y);
+    decide(base + vec2<i32>(0, 1), f.z, s.z);
+    decide(base + vec2<i32>(1, 1), f.w, s.w);
+}
+
+// Pixel p's probability (from its acuity term `acuity` and saliency `salient`), sample
+// decision and reprojection.
+fn decide(p: vec2<i32>, acuity: f32, salient: f32) {
     if (!in_frame(p)) {
         return;
     }
+    let id = vec2<u32>(p);
     let nd = textureLoad(normal_distance, p, 0);
     let covered = textureLoad(albedo_tex, p, 0).a > 0.0;
     let k = index_of(p);
@@ -159,10 +239,9 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
         let ndc = prev_clip.xy / prev_clip.w;
         prev = vec2<f32>((ndc.x * 0.5 + 0.5) * f32(frame.width), (0.5 - ndc.y * 0.5) * f32(frame.height));
     }
-    let e = eccentricity_deg(centre);
-    var f = acuity_probability(frame.mar_slope * e + frame.mar_w0_deg);
+    var f = acuity;
     if (has_mode(MODE_SALIENCY) && f < 1.0) {
-        var s = saliency(p);
+        var s = salient;
         if (has_mode(MODE_EDGES_AT_MAR)) {
             // One sample per pixel across an edge, one per resolvable cell along it.
             s *= sqrt(f);

@@ -8,7 +8,7 @@ use fovea::foveation::rank_map;
 use fovea::foveation::reconstruct::{jfa_with_steps, reconstruct, unpack, NO_SEED};
 use fovea::optics::acuity::{acuity_probability, mar_deg, ProbabilityForm};
 use fovea::render::uniforms::{FLAG_COVERED, FLAG_REUSED, FLAG_SAMPLED};
-use fovea::render::{FrameRequest, Inspection};
+use fovea::render::{FrameRequest, Inspection, Renderer};
 use fovea::scene::Scene;
 use fovea::settings::{Noise, Reconstruction};
 use fovea::viewing::Viewing;
@@ -355,24 +355,37 @@ fn with_xi_zero_and_gaze_off_the_object_only_the_forced_minimum_is_shaded() {
 
 #[test]
 fn saliency_in_the_sampling_map_matches_the_cpu_twin() {
-    use fovea::optics::saliency::saliency;
+    // The shader decides 2×2 blocks of pixels: an odd size leaves blocks half outside.
     let mut r = renderer();
-    let (w, h) = (120, 90);
+    for (w, h) in [(120, 90), (121, 91)] {
+        saliency_matches_at(&mut r, w, h);
+    }
+}
+
+fn saliency_matches_at(r: &mut Renderer, w: u32, h: u32) {
+    use fovea::optics::saliency::saliency;
     let mut req = foveated("balanced", w, h, [0.0, 0.0]);
     let f = &mut req.settings.foveation;
     f.motion = false;
     f.min_probability = 0.0;
     f.mar_slope = 1.0; // acuity ≈ 0 away from the corner: the map is saliency alone
-    req.stream = 5;
+    req.stream = 5 + u64::from(w % 2);
     let scene = Scene::builtin("bunny").unwrap();
     r.render(&req).unwrap();
-    let img = inspect(&r, &req);
+    let img = inspect(r, &req);
     let (wi, hi) = (w as i32, h as i32);
     let mut salient = 0;
     for y in 0..hi {
         for x in 0..wi {
             let k = (y * wi + x) as usize;
-            if img.flags[k] & FLAG_COVERED == 0 || x < 8 || y < 8 {
+            // Every pixel is decided, the last column and row of an odd size included.
+            let covered = img.normal_distance[k][3] > 0.0;
+            assert_eq!(
+                img.flags[k] & FLAG_COVERED != 0,
+                covered,
+                "{w}x{h}: ({x},{y})"
+            );
+            if !covered || x < 8 || y < 8 {
                 continue;
             }
             let mut albedo = [[0.0f32; 3]; 9];

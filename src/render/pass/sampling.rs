@@ -2,7 +2,9 @@
 //! blue- or white-noise decision, and the reprojection cache test for pixels not chosen.
 //! Writes probability, flags, reused colours and the seeds jump flooding starts from.
 
-use crate::render::graph::{read, texture, uniform, write, GraphError, PassDecl, Recorder};
+use crate::render::graph::{
+    read, texture, uniform, write, DispatchSize, GraphError, PassDecl, Recorder,
+};
 
 pub const PASS: PassDecl = PassDecl {
     label: "sampling",
@@ -24,6 +26,13 @@ pub const PASS: PassDecl = PassDecl {
     entry_points: &["main"],
 };
 
+/// One invocation per 2×2 block of pixels (the blocks share their saliency's G-buffer reads,
+/// and on a software adapter a pixel's share of an invocation's fixed cost falls by four),
+/// 8×8 blocks a workgroup.
 pub fn record(f: &mut Recorder) -> Result<(), GraphError> {
-    f.run_frame_pass(&PASS)
+    let (w, h) = f.size;
+    let groups = DispatchSize::Groups(w.div_ceil(16), h.div_ceil(16), 1);
+    let d = f.dispatch(&PASS, "main", groups)?;
+    f.compute(PASS.label, &[d]);
+    Ok(())
 }
