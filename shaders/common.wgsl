@@ -99,8 +99,20 @@ struct PhotonNode {
 
 // ---- Microfacet specular (CPU twin: optics::specular; Karis's UE4 form) ----
 
+// Entry i of the lobe table. Read with constant indices only: indexing a struct value's
+// array by a variable makes the shader compiler copy the whole material (288 bytes) to
+// per-invocation memory at every call, which cost the software adapter a fifth of gallery's
+// shading pass.
 fn lobe_entry(m: Material, i: u32) -> vec2<f32> {
-    let q = m.lobe[i / 2u];
+    let j = i / 2u;
+    var q = m.lobe[0];
+    q = select(q, m.lobe[1], j == 1u);
+    q = select(q, m.lobe[2], j == 2u);
+    q = select(q, m.lobe[3], j == 3u);
+    q = select(q, m.lobe[4], j == 4u);
+    q = select(q, m.lobe[5], j == 5u);
+    q = select(q, m.lobe[6], j == 6u);
+    q = select(q, m.lobe[7], j == 7u);
     if ((i & 1u) == 0u) {
         return q.xy;
     }
@@ -275,6 +287,19 @@ fn punctual_shadow(atlas: texture_2d<f32>, li: PunctualLight, x: vec3<f32>, n: v
     return punctual_shadow_map(atlas, li, x, n);
 }
 
+// The light's view of cube face `face` (0 for a spot), read with constant indices only (see
+// `lobe_entry`: a variable index copies the whole light, 448 bytes, per call).
+fn face_view(li: PunctualLight, face: u32) -> mat4x4<f32> {
+    switch face {
+        case 1u: { return li.views[1]; }
+        case 2u: { return li.views[2]; }
+        case 3u: { return li.views[3]; }
+        case 4u: { return li.views[4]; }
+        case 5u: { return li.views[5]; }
+        default: { return li.views[0]; }
+    }
+}
+
 // The light's shadow tiles alone (the photon pass has no frame, and so no mode bits).
 fn punctual_shadow_map(atlas: texture_2d<f32>, li: PunctualLight, x: vec3<f32>, n: vec3<f32>) -> f32 {
     if (li.shadow.x < 0.0) {
@@ -285,7 +310,7 @@ fn punctual_shadow_map(atlas: texture_2d<f32>, li: PunctualLight, x: vec3<f32>, 
     let xo = x + n * texel;
     let point = u32(li.position_kind.w) == 1u;
     let face = select(0u, cube_face(xo - pos), point);
-    let p = li.views[face] * vec4<f32>(xo, 1.0);
+    let p = face_view(li, face) * vec4<f32>(xo, 1.0);
     if (p.w <= 0.0) {
         return 1.0;
     }
