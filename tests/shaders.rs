@@ -3,7 +3,8 @@
 //! - every pass's declared bindings match its shader's, binding for binding, in kind and access
 //!   mode, and a binding declared read-write is written by some entry point;
 //! - `struct Frame` has exactly `FrameUniform`'s fields at the same offsets, and the generated
-//!   constants reach the shaders with Rust's values.
+//!   constants reach the shaders with Rust's values;
+//! - no shader indexes an array value with a variable (a copy of the whole value per access).
 
 use fovea::render::frame::PASSES;
 use fovea::render::gpu::{compose, COMMON};
@@ -206,4 +207,46 @@ fn every_file_in_shaders_dir_belongs_to_a_pass() {
             "{name} is no pass's shader: give it a pass in render/pass/ and list it in frame.rs"
         );
     }
+}
+
+/// Where a function indexes an array *value* (a struct argument's array member, a `let` array)
+/// with a variable: the function and the expression's index.
+fn variable_indexes_into_values(module: &naga::Module, info: &ModuleInfo) -> Vec<String> {
+    let mut found = Vec::new();
+    let functions = module.functions.iter().map(|(h, f)| (f, &info[h]));
+    let entries = (module.entry_points.iter().enumerate())
+        .map(|(i, ep)| (&ep.function, info.get_entry_point(i)));
+    for (function, fun_info) in functions.chain(entries) {
+        for (handle, expr) in function.expressions.iter() {
+            let naga::Expression::Access { base, index } = *expr else {
+                continue;
+            };
+            let constant = matches!(
+                function.expressions[index],
+                naga::Expression::Literal(_) | naga::Expression::Constant(_)
+            );
+            let base_ty = fun_info[base].ty.inner_with(&module.types);
+            if !constant && matches!(base_ty, naga::TypeInner::Array { .. }) {
+                let name = function.name.clone().unwrap_or_default();
+                found.push(format!("{name} (expression {})", handle.index()));
+            }
+        }
+    }
+    found
+}
+
+/// An array inside a value (a struct read from a buffer and passed on, a `let` array) indexed
+/// by a variable makes the compiler copy the whole value to per-invocation memory first, at
+/// every such access: on lavapipe a material's lobe table read so cost gallery's shading pass
+/// 30%, a light's cube views 10% more, and the saliency's Sobel kernels (`let` arrays) cost
+/// the sampling pass about as much as everything else it does, even with saliency off. Index
+/// a buffer or a `var` through its pointer, or select among constant indices.
+#[test]
+fn no_shader_indexes_an_array_value_with_a_variable() {
+    let mut found = std::collections::BTreeSet::new();
+    for decl in PASSES {
+        let (module, info) = pass_module(decl);
+        found.extend(variable_indexes_into_values(&module, &info));
+    }
+    assert!(found.is_empty(), "{found:?}");
 }
