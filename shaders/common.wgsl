@@ -101,7 +101,7 @@ struct PhotonNode {
 
 // Entry i of the lobe table. Read with constant indices only: indexing a struct value's
 // array by a variable makes the shader compiler copy the whole material (288 bytes) to
-// per-invocation memory at every call, which cost the software adapter a fifth of gallery's
+// per-invocation memory at every call, which cost the software adapter 30% of gallery's
 // shading pass.
 fn lobe_entry(m: Material, i: u32) -> vec2<f32> {
     let j = i / 2u;
