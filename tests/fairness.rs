@@ -16,8 +16,9 @@ use fovea::settings::{Preset, RenderSettings};
 const WAIT: Duration = Duration::from_secs(60);
 /// Both tests time the renderer (frame intervals, calibrated estimates). Run together, each
 /// server's software driver takes the same two cores from the other: the light session's
-/// 320x240 frames took 600-950 ms instead of tens, and fair queueing then rightly gave the 4K
-/// session ten parts per light frame (CI failed so). One at a time, each measures itself.
+/// 320x240 frames of the default scene took 600-950 ms instead of ~400, and fair queueing then
+/// rightly gave the 4K session ten parts per light frame (CI failed so). One at a time, each
+/// measures itself.
 static SERIAL: tokio::sync::Mutex<()> = tokio::sync::Mutex::const_new(());
 
 fn hello(w: u32, h: u32, preset: &str) -> Hello {
