@@ -7,35 +7,40 @@
 @group(0) @binding(1) var<storage, read> color: array<vec4<f32>>;
 @group(0) @binding(2) var<storage, read> flags: array<u32>;
 @group(0) @binding(3) var albedo_tex: texture_2d<f32>;
-@group(0) @binding(4) var<storage, read_write> cells: array<vec4<f32>>;
 @group(0) @binding(5) var<storage, read_write> out_resolved: array<vec4<f32>>;
 @group(0) @binding(7) var normal_distance: texture_2d<f32>;
+// The pyramid lives in textures rather than storage buffers: a software adapter gathers a
+// texel per lane at once but loads from a buffer one lane at a time, and each cell here reads
+// several neighbours. Levels alternate between two atlases (odd and even levels) so that a
+// dispatch reads one and writes the other; `_in` and `_out` are routed per dispatch.
+@group(0) @binding(4) var moments_out: texture_storage_2d_array<rgba32float, write>;
+@group(0) @binding(8) var moments_in: texture_2d_array<f32>;
+@group(0) @binding(9) var planes_in: texture_2d_array<f32>;
+@group(0) @binding(10) var planes_out: texture_storage_2d_array<rgba32float, write>;
 
-// One level's dispatch: this level and the one above (its parent), in cells.
+// One level's dispatch: this level's size and corner in its atlas, and the same of its
+// neighbour level (pull: the children's level below; push: the parents' level above).
 struct Level {
     size: vec2<u32>,
-    offset: u32,
+    origin: vec2<u32>,
+    near_size: vec2<u32>,
+    near_origin: vec2<u32>,
     level: u32,
-    parent_size: vec2<u32>,
-    parent_offset: u32,
     // 1 when the level above exists (push), else the top cell leans on nothing.
     has_parent: u32,
     ridge: f32,
     floor: f32,
-    child_offset: u32,
     depth_tolerance: f32,
     material_tolerance: f32,
     pad0: u32,
     pad1: u32,
-    pad2: u32,
 }
 @group(0) @binding(6) var<uniform> level: Level;
 
 // Moments (pull): c, w, mean, scatter s = (xx, xy, yy), cross terms t per axis, mean depth and
-// material id with their spreads, sample range (lo, hi over all channels). Six vec4 per cell:
+// material id with their spreads, sample range (lo, hi over all channels). Six layers per cell:
 // (c, w), (mean, s.xy), (tx, s.z), (ty, depth), (lo, hi, material, depth_var),
-// (material_var, 0, 0, 0). After push the cell holds a plane in four of them (`store_plane`),
-// since every plane is read four times per pixel below it.
+// (material_var, 0, 0, 0). Push writes the cell's plane to four layers (`store_plane`).
 struct Cell {
     c: vec3<f32>,
     w: f32,
@@ -58,36 +63,35 @@ fn empty_cell() -> Cell {
     return Cell(z, 0.0, vec2<f32>(0.0), z, z, z, 0.0, BIG, -BIG, 0.0, 0.0, 0.0);
 }
 
-const CELL_VEC4S: u32 = 6u;
-
-fn load_cell(i: u32) -> Cell {
-    let at = CELL_VEC4S * i;
-    let a = cells[at];
-    let b = cells[at + 1u];
-    let c = cells[at + 2u];
-    let d = cells[at + 3u];
-    let e = cells[at + 4u];
-    return Cell(a.rgb, a.a, b.xy, vec3<f32>(b.z, b.w, c.a), c.rgb, d.rgb, d.a, e.x, e.y, e.z, e.w, cells[at + 5u].x);
+// The moments of the cell at atlas texel `q`.
+fn load_cell(q: vec2<u32>) -> Cell {
+    let p = vec2<i32>(q);
+    let a = textureLoad(moments_in, p, 0, 0);
+    let b = textureLoad(moments_in, p, 1, 0);
+    let c = textureLoad(moments_in, p, 2, 0);
+    let d = textureLoad(moments_in, p, 3, 0);
+    let e = textureLoad(moments_in, p, 4, 0);
+    let m = textureLoad(moments_in, p, 5, 0).x;
+    return Cell(a.rgb, a.a, b.xy, vec3<f32>(b.z, b.w, c.a), c.rgb, d.rgb, d.a, e.x, e.y, e.z, e.w, m);
 }
 
-fn store_cell(i: u32, v: Cell) {
-    let at = CELL_VEC4S * i;
-    cells[at] = vec4<f32>(v.c, v.w);
-    cells[at + 1u] = vec4<f32>(v.mean, v.s.x, v.s.y);
-    cells[at + 2u] = vec4<f32>(v.tx, v.s.z);
-    cells[at + 3u] = vec4<f32>(v.ty, v.depth);
-    cells[at + 4u] = vec4<f32>(v.lo, v.hi, v.material, v.depth_var);
-    cells[at + 5u] = vec4<f32>(v.material_var, 0.0, 0.0, 0.0);
+fn store_cell(q: vec2<u32>, v: Cell) {
+    let p = vec2<i32>(q);
+    textureStore(moments_out, p, 0, vec4<f32>(v.c, v.w));
+    textureStore(moments_out, p, 1, vec4<f32>(v.mean, v.s.x, v.s.y));
+    textureStore(moments_out, p, 2, vec4<f32>(v.tx, v.s.z));
+    textureStore(moments_out, p, 3, vec4<f32>(v.ty, v.depth));
+    textureStore(moments_out, p, 4, vec4<f32>(v.lo, v.hi, v.material, v.depth_var));
+    textureStore(moments_out, p, 5, vec4<f32>(v.material_var, 0.0, 0.0, 0.0));
 }
 
 // A completed cell's plane: value and material spread, gradient, depth, range and material.
-// (w is 1 and the moments are spent once a cell is completed, so their slots are reused.)
-fn store_plane(i: u32, v: Cell) {
-    let at = CELL_VEC4S * i;
-    cells[at] = vec4<f32>(v.c, v.material_var);
-    cells[at + 2u] = vec4<f32>(v.tx, 0.0);
-    cells[at + 3u] = vec4<f32>(v.ty, v.depth);
-    cells[at + 4u] = vec4<f32>(v.lo, v.hi, v.material, v.depth_var);
+fn store_plane(q: vec2<u32>, v: Cell) {
+    let p = vec2<i32>(q);
+    textureStore(planes_out, p, 0, vec4<f32>(v.c, v.material_var));
+    textureStore(planes_out, p, 1, vec4<f32>(v.tx, 0.0));
+    textureStore(planes_out, p, 2, vec4<f32>(v.ty, v.depth));
+    textureStore(planes_out, p, 3, vec4<f32>(v.lo, v.hi, v.material, v.depth_var));
 }
 
 // What the G-buffer alone predicts of a pixel's colour: the key light's Lambert term with the
@@ -194,15 +198,15 @@ fn pull_pixels(@builtin(global_invocation_id) id: vec3<u32>) {
         return;
     }
     let m = merge(child_pixel(id.xy, 0u), child_pixel(id.xy, 1u), child_pixel(id.xy, 2u), child_pixel(id.xy, 3u));
-    store_cell(level.offset + id.y * level.size.x + id.x, m);
+    store_cell(level.origin + id.xy, m);
 }
 
-// Child `i` (0..3, row-major) of cell `id` one level down (`child_offset`, `parent_size`
-// holds the child level's size), or an empty cell past its border.
+// Child `i` (0..3, row-major) of cell `id` one level down (the `near` level), or an empty
+// cell past its border.
 fn child_cell(id: vec2<u32>, i: u32) -> Cell {
     let q = 2u * id + vec2<u32>(i & 1u, i >> 1u);
-    if (all(q < level.parent_size)) {
-        return load_cell(level.child_offset + q.y * level.parent_size.x + q.x);
+    if (all(q < level.near_size)) {
+        return load_cell(level.near_origin + q);
     }
     return empty_cell();
 }
@@ -214,7 +218,7 @@ fn pull(@builtin(global_invocation_id) id: vec3<u32>) {
         return;
     }
     let m = merge(child_cell(id.xy, 0u), child_cell(id.xy, 1u), child_cell(id.xy, 2u), child_cell(id.xy, 3u));
-    store_cell(level.offset + id.y * level.size.x + id.x, m);
+    store_cell(level.origin + id.xy, m);
 }
 
 // What a parent lends its children: its plane, depth, sample range, and its centre (pixels).
@@ -233,12 +237,13 @@ struct Plane {
 
 // A completed cell of the level above, clamped into it (edge cells stand in past the border).
 fn load_plane(q: vec2<i32>, ps: f32) -> Plane {
-    let c = clamp(q, vec2<i32>(0), vec2<i32>(level.parent_size) - 1);
-    let at = CELL_VEC4S * (level.parent_offset + u32(c.y) * level.parent_size.x + u32(c.x));
-    let a = cells[at];
-    let t = cells[at + 3u];
-    let e = cells[at + 4u];
-    return Plane(a.rgb, t.a, e.z, e.w, a.a, cells[at + 2u].rgb, t.rgb, e.x, e.y, (vec2<f32>(c) + 0.5) * ps);
+    let c = clamp(q, vec2<i32>(0), vec2<i32>(level.near_size) - 1);
+    let p = c + vec2<i32>(level.near_origin);
+    let a = textureLoad(planes_in, p, 0, 0);
+    let x = textureLoad(planes_in, p, 1, 0);
+    let t = textureLoad(planes_in, p, 2, 0);
+    let e = textureLoad(planes_in, p, 3, 0);
+    return Plane(a.rgb, t.a, e.z, e.w, a.a, x.rgb, t.rgb, e.x, e.y, (vec2<f32>(c) + 0.5) * ps);
 }
 
 // Bilinear position of a level-`l` centre among the parents: the first parent and the weights.
@@ -353,7 +358,7 @@ fn push(@builtin(global_invocation_id) id: vec3<u32>) {
     if (any(id.xy >= level.size)) {
         return;
     }
-    let i = level.offset + id.y * level.size.x + id.x;
+    let i = level.origin + id.xy;
     let side = f32(1u << level.level);
     let centre = (vec2<f32>(id.xy) + 0.5) * side;
     let cell = load_cell(i);

@@ -330,15 +330,24 @@ fn planes_do_not_reach_across_a_material_boundary() {
 fn pull_push_on_the_gpu_matches_its_cpu_twin() {
     use fovea::foveation::pull_push;
     let mut r = renderer();
-    let scene = Scene::builtin("bunny").unwrap();
-    // Odd, non-power-of-two sizes, the gaze off centre, and a frame of a single pixel.
-    for (stream, (w, h), gaze) in [
-        (1, (97, 61), [0.3, 0.4]),
-        (2, (64, 48), [0.9, 0.1]),
-        (3, (1, 1), [0.5, 0.5]),
+    // Odd, non-power-of-two sizes, the gaze off centre, and a frame of a single pixel; the last
+    // frame, inside the Cornell box, has no background: every cell of every level counts.
+    for (stream, name, (w, h), gaze) in [
+        (1, "bunny", (97, 61), [0.3, 0.4]),
+        (2, "bunny", (64, 48), [0.9, 0.1]),
+        (3, "bunny", (1, 1), [0.5, 0.5]),
+        (4, "cornell", (150, 113), [0.9, 0.85]),
     ] {
+        let scene = Scene::builtin(name).unwrap();
         let mut req = foveated("balanced", w, h, gaze);
+        req.scene = name.to_string();
         req.stream = stream;
+        if name == "cornell" {
+            // Narrowed to the inside of the box: no background.
+            let mut camera = scene.file.camera.clone();
+            camera.fov_y_deg = 12.0;
+            req.camera = Some(camera);
+        }
         req.settings.foveation.reconstruction = Reconstruction::PullPush;
         let frame = r.render(&req).unwrap();
         let img = inspect(&r, &req);
@@ -366,7 +375,13 @@ fn pull_push_on_the_gpu_matches_its_cpu_twin() {
             worst < 1e-3,
             "{w}x{h}: GPU and CPU differ by {worst} (relative, from {LAVAPIPE})"
         );
+
         assert!(frame.sampled > 0.0 || w * h == 1);
+        let covered = img.flags.iter().filter(|f| *f & FLAG_COVERED != 0).count();
+        assert!(
+            name != "cornell" || covered == n,
+            "{covered} of {n} pixels covered"
+        );
     }
 }
 

@@ -47,6 +47,14 @@ fn shader_bindings(
                     Access::Read
                 }
             }
+            (
+                naga::AddressSpace::Handle,
+                naga::TypeInner::Image {
+                    arrayed: true,
+                    class: naga::ImageClass::Storage { .. },
+                    ..
+                },
+            ) => Access::WriteLayers,
             (naga::AddressSpace::Handle, naga::TypeInner::Image { arrayed: true, .. }) => {
                 Access::TextureArray
             }
@@ -101,8 +109,10 @@ fn declared_bindings_match_the_shaders() {
                     decl.label, b.name
                 );
             };
+            // Filtering is the layout's business too: both array forms read the same in WGSL.
             let declared = match b.access {
                 Access::DynamicUniform { .. } => Access::Uniform,
+                Access::Layers => Access::TextureArray,
                 a => a,
             };
             assert_eq!(
@@ -116,7 +126,7 @@ fn declared_bindings_match_the_shaders() {
                 decl.label,
                 b.name
             );
-            if b.access == Access::ReadWrite {
+            if b.access.writes() {
                 assert!(
                     used.intersects(GlobalUse::WRITE | GlobalUse::ATOMIC),
                     "{}: {} is declared read-write but `{var}` is never written: declare it read",

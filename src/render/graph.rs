@@ -14,74 +14,10 @@ use std::collections::HashMap;
 use super::gpu;
 use super::timer::PassTimer;
 
-/// How a pass uses a bound resource; each maps to one WGSL declaration form.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum Access {
-    /// `var<uniform>`.
-    Uniform,
-    /// `var<uniform>` selected per dispatch by a dynamic offset; `size` bytes are visible.
-    DynamicUniform { size: u64 },
-    /// `var<storage, read>`.
-    Read,
-    /// `var<storage, read_write>`: the pass writes it (and may read it).
-    ReadWrite,
-    /// `texture_2d<f32>` read with `textureLoad` (never filtered).
-    Texture,
-    /// `texture_2d_array<f32>` sampled with filtering (material textures).
-    TextureArray,
-    /// A filtering `sampler`.
-    Sampler,
-}
-
-/// One binding of a pass: the resource (or port) name and how it is used.
-#[derive(Debug, Clone, Copy)]
-pub struct Binding {
-    pub name: &'static str,
-    pub access: Access,
-}
-
-pub const fn uniform(name: &'static str) -> Binding {
-    Binding {
-        name,
-        access: Access::Uniform,
-    }
-}
-pub const fn dynamic_uniform(name: &'static str, size: u64) -> Binding {
-    Binding {
-        name,
-        access: Access::DynamicUniform { size },
-    }
-}
-pub const fn read(name: &'static str) -> Binding {
-    Binding {
-        name,
-        access: Access::Read,
-    }
-}
-pub const fn write(name: &'static str) -> Binding {
-    Binding {
-        name,
-        access: Access::ReadWrite,
-    }
-}
-pub const fn texture(name: &'static str) -> Binding {
-    Binding {
-        name,
-        access: Access::Texture,
-    }
-}
-pub const fn texture_array(name: &'static str) -> Binding {
-    Binding {
-        name,
-        access: Access::TextureArray,
-    }
-}
-pub const fn sampler(name: &'static str) -> Binding {
-    Binding {
-        name,
-        access: Access::Sampler,
-    }
-}
+pub use super::binding::{
+    dynamic_uniform, layers, read, sampler, texture, texture_array, uniform, write, write_layers,
+    Access, Binding,
+};
 
 /// Everything the graph needs to know about a pass, stated once beside its shader.
 #[derive(Debug)]
@@ -109,7 +45,7 @@ impl PassDecl {
     pub fn reads(&self) -> Vec<&'static str> {
         self.bindings
             .iter()
-            .filter(|b| b.access != Access::ReadWrite)
+            .filter(|b| !b.access.writes())
             .map(|b| b.name)
             .collect()
     }
@@ -118,7 +54,7 @@ impl PassDecl {
     pub fn writes(&self) -> Vec<&'static str> {
         self.bindings
             .iter()
-            .filter(|b| b.access == Access::ReadWrite)
+            .filter(|b| b.access.writes())
             .map(|b| b.name)
             .chain(self.attachments.iter().copied())
             .collect()
@@ -126,15 +62,7 @@ impl PassDecl {
 
     fn layout_entries(&self) -> Vec<wgpu::BindGroupLayoutEntry> {
         self.numbered()
-            .map(|(i, b)| match b.access {
-                Access::Uniform => gpu::uniform(i, false),
-                Access::DynamicUniform { .. } => gpu::uniform(i, true),
-                Access::Read => gpu::storage_buffer(i, true),
-                Access::ReadWrite => gpu::storage_buffer(i, false),
-                Access::Texture => gpu::texture(i, gpu::FLOAT),
-                Access::TextureArray => gpu::texture_array(i),
-                Access::Sampler => gpu::sampler(i),
-            })
+            .map(|(i, b)| b.access.layout_entry(i))
             .collect()
     }
 }
@@ -235,9 +163,10 @@ impl Resources {
                 name,
             };
             let resource = match (self.map.get(name).ok_or(missing)?, b.access) {
-                (Resource::Texture(_, view), Access::Texture | Access::TextureArray) => {
-                    wgpu::BindingResource::TextureView(view)
-                }
+                (
+                    Resource::Texture(_, view),
+                    Access::Texture | Access::TextureArray | Access::Layers | Access::WriteLayers,
+                ) => wgpu::BindingResource::TextureView(view),
                 (Resource::Sampler(s), Access::Sampler) => wgpu::BindingResource::Sampler(s),
                 (Resource::Buffer(buf), Access::DynamicUniform { size }) => {
                     wgpu::BindingResource::Buffer(wgpu::BufferBinding {

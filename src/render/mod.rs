@@ -10,6 +10,7 @@
 //!
 //! This module imports nothing from `protocol` or `server` (`tests/boundaries.rs`).
 
+pub mod binding;
 pub mod cost;
 pub mod cpu_reference;
 mod device;

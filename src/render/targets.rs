@@ -71,6 +71,35 @@ fn textures() -> [(&'static str, wgpu::TextureFormat, wgpu::TextureUsages); 6] {
     ]
 }
 
+/// The pull-push pyramid's atlases, moments and planes for each parity of level.
+fn pyramid(device: &wgpu::Device, r: &mut Resources, width: u32, height: u32) {
+    for odd in [false, true] {
+        let (w, h) = pull_push::atlas_size(width, height, odd);
+        let sets = [
+            (pull_push::MOMENTS, pull_push::MOMENT_LAYERS),
+            (pull_push::PLANES, pull_push::PLANE_LAYERS),
+        ];
+        for (names, layers) in sets {
+            let name = names[usize::from(odd)];
+            let texture = device.create_texture(&wgpu::TextureDescriptor {
+                label: Some(name),
+                size: wgpu::Extent3d {
+                    width: w,
+                    height: h,
+                    depth_or_array_layers: layers,
+                },
+                mip_level_count: 1,
+                sample_count: 1,
+                dimension: wgpu::TextureDimension::D2,
+                format: wgpu::TextureFormat::Rgba32Float,
+                usage: U::STORAGE_BINDING | U::TEXTURE_BINDING,
+                view_formats: &[],
+            });
+            r.texture_array(name, texture);
+        }
+    }
+}
+
 impl FrameTargets {
     /// Creates the stream's resources beside `shared` (the scene's and the renderer's) and
     /// `planned_materials` (the scene's materials as this frame size's plan shades them).
@@ -118,12 +147,8 @@ impl FrameTargets {
             "jfa.steps",
             buffer("jfa.steps", steps, B::UNIFORM | B::COPY_DST),
         );
+        pyramid(device, &mut r, width, height);
         for (name, bytes, usage) in [
-            (
-                "pull_push.cells",
-                pull_push::cells_bytes(width, height),
-                B::STORAGE,
-            ),
             (
                 "pull_push.levels",
                 pull_push::levels_bytes(width, height),
@@ -171,7 +196,7 @@ impl FrameTargets {
             + PER_PIXEL.iter().map(|p| p.1).sum::<u64>()
             + 4;
         u64::from(width) * u64::from(height) * per_pixel
-            + pull_push::cells_bytes(width, height)
+            + pull_push::pyramid_bytes(width, height)
             + shade::coarse_bytes(width, height)
             + 2 * 4 * i420::words(width, height)
     }

@@ -1,6 +1,7 @@
 //! Pull-push reconstruction (foveated frames with `reconstruction: pull_push`): moments pulled
 //! up a pyramid of 2×2 cells, planes pushed back down, then every pixel filled. Replaces jump
 //! flooding and the resolve pass for those frames; O(N) work instead of N log N plus a window.
+//! The pyramid is kept in two texture atlases (odd and even levels); see the shader for why.
 //! CPU twin: `foveation::pull_push`.
 
 use bytemuck::{Pod, Zeroable};
@@ -10,15 +11,21 @@ use crate::foveation::pull_push::{
     MATERIAL_TOLERANCE,
 };
 use crate::render::graph::{
-    dynamic_uniform, read, texture, uniform, write, DispatchSize, GraphError, PassDecl, Recorder,
+    dynamic_uniform, layers, read, texture, uniform, write, write_layers, DispatchSize, GraphError,
+    PassDecl, Recorder,
 };
 
 /// Uniform slots start at multiples of the device's offset alignment (256 by default).
 pub const SLOT: u64 = 256;
 
-/// Bytes of one pyramid cell: six vec4 (moments, depth and material with their spreads, sample
-/// range; then the plane in four of them).
-pub const CELL_BYTES: u64 = 96;
+/// Layers of a cell's moments and of its plane, one rgba32float texel each.
+pub const MOMENT_LAYERS: u32 = 6;
+pub const PLANE_LAYERS: u32 = 4;
+
+/// The atlases: odd levels in one, even levels in the other, so each dispatch reads one
+/// parity and writes the other.
+pub const MOMENTS: [&str; 2] = ["pull_push.moments[even]", "pull_push.moments[odd]"];
+pub const PLANES: [&str; 2] = ["pull_push.planes[even]", "pull_push.planes[odd]"];
 
 pub const PASS: PassDecl = PassDecl {
     label: "pull_push",
@@ -29,10 +36,13 @@ pub const PASS: PassDecl = PassDecl {
         read("shade.color"),
         read("sampling.flags"),
         texture("gbuffer.albedo"),
-        write("pull_push.cells"),
+        write_layers("pull_push.moments_out"),
         write("resolve.color"),
         dynamic_uniform("pull_push.levels", std::mem::size_of::<Level>() as u64),
         texture("gbuffer.normal_distance"),
+        layers("pull_push.moments_in"),
+        layers("pull_push.planes_in"),
+        write_layers("pull_push.planes_out"),
     ],
     attachments: &[],
     entry_points: &["pull_pixels", "pull", "push", "push_pixels"],
@@ -43,17 +53,16 @@ pub const PASS: PassDecl = PassDecl {
 #[derive(Debug, Clone, Copy, Default, Pod, Zeroable)]
 pub struct Level {
     size: [u32; 2],
-    offset: u32,
+    origin: [u32; 2],
+    near_size: [u32; 2],
+    near_origin: [u32; 2],
     level: u32,
-    parent_size: [u32; 2],
-    parent_offset: u32,
     has_parent: u32,
     ridge: f32,
     floor: f32,
-    child_offset: u32,
     depth_tolerance: f32,
     material_tolerance: f32,
-    pad: [u32; 3],
+    pad: [u32; 2],
 }
 
 /// Levels above the pixels the GPU keeps (at least one, so a 1×1 frame has a top cell).
@@ -61,21 +70,42 @@ pub fn levels(width: u32, height: u32) -> u32 {
     level_count(width, height).max(1)
 }
 
-/// First cell of each level 1..=L in the cell buffer, and the total cell count.
-fn offsets(width: u32, height: u32) -> (Vec<u32>, u32) {
-    let mut at = Vec::new();
-    let mut total = 0;
-    for l in 1..=levels(width, height) {
-        at.push(total);
-        let (w, h) = level_size(width, height, l);
-        total += w * h;
+/// Where level `l` (≥ 1) sits in its parity's atlas: the parity's first level at the corner,
+/// the later (smaller) ones stacked in a column to its right.
+fn origin(width: u32, height: u32, l: u32) -> [u32; 2] {
+    let first = 2 - l % 2;
+    if l == first {
+        return [0, 0];
     }
-    (at, total)
+    let x = level_size(width, height, first).0;
+    let y = (first + 2..l)
+        .step_by(2)
+        .map(|k| level_size(width, height, k).1)
+        .sum();
+    [x, y]
 }
 
-/// Bytes of the cell buffer at this frame size.
-pub fn cells_bytes(width: u32, height: u32) -> u64 {
-    u64::from(offsets(width, height).1) * CELL_BYTES
+/// Texel size of the atlas of levels with parity `odd` (1×1 where it holds none).
+pub fn atlas_size(width: u32, height: u32, odd: bool) -> (u32, u32) {
+    let top = levels(width, height);
+    let first = if odd { 1 } else { 2 };
+    if first > top {
+        return (1, 1);
+    }
+    let (fw, fh) = level_size(width, height, first);
+    let rest: Vec<u32> = (first + 2..=top).step_by(2).collect();
+    let column_w = rest.first().map_or(0, |&k| level_size(width, height, k).0);
+    let column_h = rest.iter().map(|&k| level_size(width, height, k).1).sum();
+    (fw + column_w, fh.max(column_h))
+}
+
+/// Bytes of both atlases' moment and plane layers at this frame size.
+pub fn pyramid_bytes(width: u32, height: u32) -> u64 {
+    let texels = |odd| {
+        let (w, h) = atlas_size(width, height, odd);
+        u64::from(w) * u64::from(h)
+    };
+    (texels(false) + texels(true)) * u64::from(MOMENT_LAYERS + PLANE_LAYERS) * 16
 }
 
 /// Bytes of the level uniforms: one slot per dispatch.
@@ -83,65 +113,55 @@ pub fn levels_bytes(width: u32, height: u32) -> u64 {
     SLOT * (2 * u64::from(levels(width, height)) + 1)
 }
 
-/// One slot per dispatch: pull_pixels, pull per level, push per level from the top, push_pixels.
+/// One slot per dispatch: pull_pixels, pull per level, push per level from the top,
+/// push_pixels (as level 0).
 fn slots(width: u32, height: u32) -> Vec<(&'static str, Level)> {
-    let (at, _) = offsets(width, height);
     let top = levels(width, height);
-    let info = |l: u32| (level_size(width, height, l), at[(l - 1) as usize]);
-    let mut out = Vec::new();
-    for l in 1..=top {
-        let ((w, h), offset) = info(l);
-        let mut s = Level {
-            size: [w, h],
-            offset,
-            level: l,
-            floor: DEMODULATION_FLOOR,
-            depth_tolerance: DEPTH_TOLERANCE,
-            material_tolerance: MATERIAL_TOLERANCE,
-            ..Level::default()
-        };
-        if l == 1 {
-            out.push(("pull_pixels", s));
+    let base = |l: u32, ridge: f32| Level {
+        size: level_size(width, height, l).into(),
+        origin: if l == 0 {
+            [0, 0]
         } else {
-            let ((cw, ch), child) = info(l - 1);
-            s.parent_size = [cw, ch];
-            s.child_offset = child;
-            out.push(("pull", s));
-        }
-    }
-    for l in (1..=top).rev() {
-        let ((w, h), offset) = info(l);
-        let mut s = Level {
-            size: [w, h],
-            offset,
-            level: l,
-            ridge: if l == top { LAMBDA_TOP } else { LAMBDA },
-            floor: DEMODULATION_FLOOR,
-            depth_tolerance: DEPTH_TOLERANCE,
-            material_tolerance: MATERIAL_TOLERANCE,
-            ..Level::default()
-        };
-        if l < top {
-            let ((pw, ph), parent) = info(l + 1);
-            (s.parent_size, s.parent_offset, s.has_parent) = ([pw, ph], parent, 1);
-        }
-        out.push(("push", s));
-    }
-    let ((pw, ph), parent) = info(1);
-    out.push((
-        "push_pixels",
-        Level {
-            size: [width, height],
-            parent_size: [pw, ph],
-            parent_offset: parent,
-            has_parent: 1,
-            floor: DEMODULATION_FLOOR,
-            depth_tolerance: DEPTH_TOLERANCE,
-            material_tolerance: MATERIAL_TOLERANCE,
-            ..Level::default()
+            origin(width, height, l)
         },
-    ));
+        level: l,
+        ridge,
+        floor: DEMODULATION_FLOOR,
+        depth_tolerance: DEPTH_TOLERANCE,
+        material_tolerance: MATERIAL_TOLERANCE,
+        ..Level::default()
+    };
+    let near = |s: &mut Level, l: u32| {
+        s.near_size = level_size(width, height, l).into();
+        s.near_origin = origin(width, height, l);
+    };
+    let mut out = vec![("pull_pixels", base(1, 0.0))];
+    for l in 2..=top {
+        let mut s = base(l, 0.0);
+        near(&mut s, l - 1);
+        out.push(("pull", s));
+    }
+    for l in (0..=top).rev() {
+        let mut s = base(l, if l == top { LAMBDA_TOP } else { LAMBDA });
+        if l < top {
+            near(&mut s, l + 1);
+            s.has_parent = 1;
+        }
+        out.push((if l == 0 { "push_pixels" } else { "push" }, s));
+    }
     out
+}
+
+/// Points the pyramid's ports at level `l`'s atlases: planes are read from the other parity
+/// and written to its own; moments likewise when pulling, read from its own when pushing.
+fn route(f: &mut Recorder, l: u32, pulling: bool) {
+    let own = (l % 2) as usize;
+    let other = 1 - own;
+    let (read, written) = if pulling { (other, own) } else { (own, other) };
+    f.route("pull_push.moments_in", MOMENTS[read]);
+    f.route("pull_push.moments_out", MOMENTS[written]);
+    f.route("pull_push.planes_in", PLANES[other]);
+    f.route("pull_push.planes_out", PLANES[own]);
 }
 
 /// Fills the frame; from here on `frame.color` is the reconstructed colour.
@@ -157,6 +177,7 @@ pub fn record(f: &mut Recorder) -> Result<(), GraphError> {
         .write_buffer(f.buffer("pull_push.levels")?, 0, &bytes);
     let mut dispatches = Vec::with_capacity(slots.len());
     for (i, (entry, s)) in slots.iter().enumerate() {
+        route(f, s.level, entry.starts_with("pull"));
         let size = DispatchSize::Groups(s.size[0].div_ceil(8), s.size[1].div_ceil(8), 1);
         let mut d = f.dispatch(&PASS, entry, size)?;
         d.offsets = vec![(i as u64 * SLOT) as u32];
