@@ -24,7 +24,8 @@
 @group(0) @binding(6) var<storage, read_write> out_color: array<vec4<f32>>;
 @group(0) @binding(7) var<storage, read> materials: array<Material>;
 @group(0) @binding(8) var blurred_normal_tex: texture_2d<f32>;
-@group(0) @binding(9) var<storage, read> nodes: array<PhotonNode>;
+// The photon pyramid, three texels a node in rows of 256 nodes (pyramid::copy_to_texels).
+@group(0) @binding(9) var node_texels: texture_2d<f32>;
 @group(0) @binding(10) var<storage, read> diffused: array<vec4<f32>>;
 @group(0) @binding(11) var irradiance_tex: texture_2d<f32>;
 @group(0) @binding(12) var shadow_tex: texture_2d<f32>;
@@ -130,13 +131,20 @@ fn gathered(m: Material, light: vec3<f32>, rd_area: vec3<f32>) -> Gathered {
     return Gathered(light, coverage);
 }
 
+fn node_at(i: u32) -> PhotonNode {
+    let p = vec2<i32>(i32(3u * (i & 255u)), i32(i >> 8u));
+    let a = textureLoad(node_texels, p, 0);
+    let b = textureLoad(node_texels, p + vec2<i32>(1, 0), 0);
+    return PhotonNode(a, b, textureLoad(node_texels, p + vec2<i32>(2, 0), 0));
+}
+
 // Σ R_d(|x_c − x_o|) Φ_c over every photon (eq. 8).
 fn gather_all(x_o: vec3<f32>, m: Material) -> Gathered {
     let n = frame.photon_side;
     var sum = vec3<f32>(0.0);
     var rd_area = vec3<f32>(0.0);
     for (var i = 0u; i < n * n; i++) {
-        let node = nodes[i];
+        let node = node_at(i);
         if (node.flux.w > 0.0) {
             let rd = leaf_rd(m, node, x_o);
             sum += rd * node.flux.rgb;
@@ -164,7 +172,7 @@ fn gather_cut(x_o: vec3<f32>, m: Material) -> Gathered {
             sp -= 1u;
             let level = stack[sp].x;
             let index = stack[sp].y;
-            let node = nodes[level_offset(level) + index];
+            let node = node_at(level_offset(level) + index);
             if (node.flux.w <= 0.0) {
                 continue;
             }

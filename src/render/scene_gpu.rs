@@ -17,7 +17,7 @@ pub struct SceneGpu {
     /// when the plan has shadows.
     pub shadow: Option<ShadowMap>,
     /// `materials.scene` (every translucent material marked subsurface, for the G-buffer and
-    /// the photon map), `scene.reach`, and `photons.nodes` (a stand-in without photons).
+    /// the photon map), `scene.reach`, and `photons.nodes` with its texels (stand-ins without photons).
     pub resources: Resources,
     /// The scene's radiosity solve, when its plan asks for one, and the snapshot uploaded.
     pub radiosity: Option<RadiosityHandle>,
@@ -89,6 +89,17 @@ impl SceneGpu {
             }),
         };
         resources.buffer("photons.nodes", nodes);
+        let texels = match photons.as_ref().and_then(PhotonMap::node_texels) {
+            Some(t) => t.clone(),
+            None => super::gpu::texture_2d(
+                device,
+                "photons.none",
+                (1, 1),
+                wgpu::TextureFormat::Rgba32Float,
+                wgpu::TextureUsages::TEXTURE_BINDING,
+            ),
+        };
+        resources.texture("photons.node_texels", texels);
         let (textures, linear_maps, samplers) = super::textures::upload(device, queue, &scene);
         resources.texture_array("materials.textures", textures);
         resources.texture_array("materials.linear_maps", linear_maps);

@@ -76,6 +76,13 @@ impl PhotonMap {
     pub fn nodes(&self) -> Option<&wgpu::Buffer> {
         self.resources.get_buffer("photons.nodes")
     }
+
+    /// The pyramid as the shading pass reads it (`pyramid::copy_to_texels`).
+    pub fn node_texels(&self) -> Option<&wgpu::Texture> {
+        self.resources
+            .get_texture("photons.node_texels")
+            .map(|(t, _)| t)
+    }
 }
 
 /// What a photon map depends on besides the scene: the light's direction and radiosity's
@@ -155,8 +162,18 @@ impl PhotonPass {
             "photons.depth",
             tex("photons.depth", F::Depth32Float, depth_usage),
         );
-        let nodes = buffer("photons.nodes", node_count() * 48, B::STORAGE | B::COPY_SRC);
+        let nodes_usage = B::STORAGE | B::COPY_SRC;
+        let nodes = buffer("photons.nodes", pyramid::nodes_bytes(), nodes_usage);
         r.buffer("photons.nodes", nodes);
+        let texels_usage = wgpu::TextureUsages::COPY_DST | wgpu::TextureUsages::TEXTURE_BINDING;
+        let texels = gpu::texture_2d(
+            device,
+            "photons.node_texels",
+            pyramid::texels_size(),
+            F::Rgba32Float,
+            texels_usage,
+        );
+        r.texture("photons.node_texels", texels);
         let uniform_size = std::mem::size_of::<PhotonUniform>() as u64;
         let uniform = buffer("photons.uniform", uniform_size, B::UNIFORM | B::COPY_DST);
         r.buffer("photons.uniform", uniform);
@@ -252,6 +269,12 @@ impl PhotonPass {
             .ok_or(missing("pyramid.levels"))?;
         self.pyramid
             .record(queue, encoder, levels, &map.pyramid_bind, timer);
+        let nodes = map.nodes().ok_or(missing("photons.nodes"))?;
+        let (texels, _) = map
+            .resources
+            .get_texture("photons.node_texels")
+            .ok_or(missing("photons.node_texels"))?;
+        pyramid::copy_to_texels(encoder, nodes, texels);
         map.built_for = Some(inputs);
         Ok(())
     }

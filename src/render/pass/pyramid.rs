@@ -1,12 +1,56 @@
 //! Photon pyramid (seed 000): the photon map's texels become leaves, then each level reduces
 //! 2×2 nodes of the one below into a cluster (flux-weighted position, summed flux, extent).
 
-use super::photons::{LEVELS, SIDE};
+use super::photons::{node_count, LEVELS, SIDE};
 use crate::render::graph::{dynamic_uniform, read, texture, uniform, write, PassDecl, Pipelines};
 use crate::render::timer::PassTimer;
 
 /// Uniform slots must start at multiples of the device's offset alignment (256 by default).
 pub const SLOT: u64 = 256;
+
+/// Nodes per row of `photons.node_texels`, each node three rgba32float texels in a row
+/// (position and extent, flux, area): 256 nodes make 12 KiB, a whole number of the 256-byte
+/// rows a buffer-to-texture copy needs.
+const NODES_PER_ROW: u32 = 256;
+
+/// Texel size of `photons.node_texels`.
+pub fn texels_size() -> (u32, u32) {
+    let rows = node_count().div_ceil(u64::from(NODES_PER_ROW)) as u32;
+    (3 * NODES_PER_ROW, rows)
+}
+
+/// Bytes of `photons.nodes`: whole rows of the texel copy.
+pub fn nodes_bytes() -> u64 {
+    u64::from(texels_size().1) * u64::from(NODES_PER_ROW) * 48
+}
+
+/// Copies the built pyramid into the texture the shading pass reads it from. The shading pass
+/// visits several nodes per pixel at addresses that differ per pixel; a software adapter
+/// fetches such texels for a whole SIMD row at once but loads buffer values one lane at a time
+/// (an extra node load per visit cost gallery's full frame 35% more, 640x480, lavapipe).
+pub fn copy_to_texels(
+    encoder: &mut wgpu::CommandEncoder,
+    nodes: &wgpu::Buffer,
+    texels: &wgpu::Texture,
+) {
+    let (width, height) = texels_size();
+    encoder.copy_buffer_to_texture(
+        wgpu::TexelCopyBufferInfo {
+            buffer: nodes,
+            layout: wgpu::TexelCopyBufferLayout {
+                offset: 0,
+                bytes_per_row: Some(width * 16),
+                rows_per_image: Some(height),
+            },
+        },
+        texels.as_image_copy(),
+        wgpu::Extent3d {
+            width,
+            height,
+            depth_or_array_layers: 1,
+        },
+    );
+}
 
 pub const PASS: PassDecl = PassDecl {
     label: "pyramid",

@@ -19,7 +19,7 @@ pub const PASS: PassDecl = PassDecl {
         write("shade.color"),
         read("materials.planned"),
         texture("gbuffer.blurred_normal"),
-        read("photons.nodes"),
+        texture("photons.node_texels"),
         read("screen_diffusion.a"),
         texture("gbuffer.irradiance"),
         texture("shadow.depth"),
