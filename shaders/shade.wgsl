@@ -164,38 +164,49 @@ fn gather_cut(x_o: vec3<f32>, m: Material) -> Gathered {
     let cluster_gain = softening_gain(m, PHOTON_SOFTENING * frame.photon_radius_mm);
     var sum = vec3<f32>(0.0);
     var rd_area = vec3<f32>(0.0);
-    var stack: array<vec2<u32>, 32>;
+    // Depth first without a stack: the quad-tree is implicit, so the next node is the previous
+    // sibling (children are visited 3, 2, 1, 0, the order a stack of 0..3 pops them) or an
+    // ancestor's. A per-pixel stack array costs a software adapter a gather and a scatter per
+    // push and pop.
+    let root_side = level_side(start);
     for (var r = 0u; r < roots; r++) {
-        stack[0] = vec2<u32>(start, r);
-        var sp = 1u;
-        while (sp > 0u) {
-            sp -= 1u;
-            let level = stack[sp].x;
-            let index = stack[sp].y;
-            let node = node_at(level_offset(level) + index);
-            if (node.flux.w <= 0.0) {
+        var level = start;
+        var q = vec2<u32>(r % root_side, r / root_side);
+        var walking = true;
+        while (walking) {
+            let node = node_at(level_offset(level) + q.y * level_side(level) + q.x);
+            var descend = false;
+            if (node.flux.w > 0.0) {
+                let d = distance(node.pos_extent.xyz, x_o);
+                if (level == 0u) {
+                    let rd = leaf_rd(m, node, x_o);
+                    sum += rd * node.flux.rgb;
+                    rd_area += rd * node.area.x;
+                } else if (level <= cut_level || node.pos_extent.w < eps * d) {
+                    let rd = dipole_rd(m, cluster_distance_mm(node, x_o)) * cluster_gain;
+                    sum += rd * node.flux.rgb;
+                    rd_area += rd * node.area.x;
+                } else {
+                    descend = true;
+                }
+            }
+            if (descend) {
+                level -= 1u;
+                q = 2u * q + vec2<u32>(1u);
                 continue;
             }
-            let d = distance(node.pos_extent.xyz, x_o);
-            if (level == 0u) {
-                let rd = leaf_rd(m, node, x_o);
-                sum += rd * node.flux.rgb;
-                rd_area += rd * node.area.x;
-                continue;
-            }
-            if (level <= cut_level || node.pos_extent.w < eps * d) {
-                let rd = dipole_rd(m, cluster_distance_mm(node, x_o)) * cluster_gain;
-                sum += rd * node.flux.rgb;
-                rd_area += rd * node.area.x;
-                continue;
-            }
-            let side = level_side(level);
-            let child_side = level_side(level - 1u);
-            let c = vec2<u32>(index % side, index / side) * 2u;
-            for (var k = 0u; k < 4u; k++) {
-                let cc = c + vec2<u32>(k & 1u, k >> 1u);
-                stack[sp] = vec2<u32>(level - 1u, cc.y * child_side + cc.x);
-                sp += 1u;
+            loop {
+                if (level == start) {
+                    walking = false;
+                    break;
+                }
+                let k = (q.x & 1u) + 2u * (q.y & 1u);
+                if (k > 0u) {
+                    q = (q & vec2<u32>(~1u)) + vec2<u32>((k - 1u) & 1u, (k - 1u) >> 1u);
+                    break;
+                }
+                q /= 2u;
+                level += 1u;
             }
         }
     }
