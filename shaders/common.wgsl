@@ -253,10 +253,8 @@ struct PunctualLight {
     axis_cos_outer: vec4<f32>,
     // x: cos of the inner angle.
     cone: vec4<f32>,
-    // World → each of its tiles of the shadow atlas (a spot uses the first, a point light all
-    // six, one per cube face in `cube_face` order).
-    views: array<mat4x4<f32>, 6>,
-    // x: first tile, −1 unshadowed; y: a texel's size per unit distance; z: tile side;
+    // x: first tile of the shadow atlas, −1 unshadowed (a spot has one, a point light six, one
+    // per cube face in `cube_face` order); y: a texel's size per unit distance; z: tile side;
     // w: tiles per atlas row.
     shadow: vec4<f32>,
 }
@@ -280,28 +278,27 @@ fn cube_face(d: vec3<f32>) -> u32 {
 // the normal, at most 8), a texel being as wide as the tile's pixels are at x's distance. The
 // slope term is what keeps a floor lit at grazing light: across the PCF's ±2 texels its own
 // distance to the light changes by about 2 texels × the slope.
-fn punctual_shadow(atlas: texture_2d<f32>, li: PunctualLight, x: vec3<f32>, n: vec3<f32>) -> f32 {
+fn punctual_shadow(atlas: texture_2d<f32>, views: texture_2d<f32>, li: PunctualLight, x: vec3<f32>, n: vec3<f32>) -> f32 {
     if (has_mode(MODE_NO_SHADOWS)) {
         return 1.0;
     }
-    return punctual_shadow_map(atlas, li, x, n);
+    return punctual_shadow_map(atlas, views, li, x, n);
 }
 
-// The light's view of cube face `face` (0 for a spot), read with constant indices only (see
-// `lobe_entry`: a variable index copies the whole light, 448 bytes, per call).
-fn face_view(li: PunctualLight, face: u32) -> mat4x4<f32> {
-    switch face {
-        case 1u: { return li.views[1]; }
-        case 2u: { return li.views[2]; }
-        case 3u: { return li.views[3]; }
-        case 4u: { return li.views[4]; }
-        case 5u: { return li.views[5]; }
-        default: { return li.views[0]; }
-    }
+// World → clip of shadow tile `tile`: row `tile` of `views` holds its columns
+// (render::lights::upload_tile_views).
+fn tile_view(views: texture_2d<f32>, tile: u32) -> mat4x4<f32> {
+    let t = i32(tile);
+    return mat4x4<f32>(
+        textureLoad(views, vec2<i32>(0, t), 0),
+        textureLoad(views, vec2<i32>(1, t), 0),
+        textureLoad(views, vec2<i32>(2, t), 0),
+        textureLoad(views, vec2<i32>(3, t), 0),
+    );
 }
 
 // The light's shadow tiles alone (the photon pass has no frame, and so no mode bits).
-fn punctual_shadow_map(atlas: texture_2d<f32>, li: PunctualLight, x: vec3<f32>, n: vec3<f32>) -> f32 {
+fn punctual_shadow_map(atlas: texture_2d<f32>, views: texture_2d<f32>, li: PunctualLight, x: vec3<f32>, n: vec3<f32>) -> f32 {
     if (li.shadow.x < 0.0) {
         return 1.0;
     }
@@ -310,7 +307,8 @@ fn punctual_shadow_map(atlas: texture_2d<f32>, li: PunctualLight, x: vec3<f32>, 
     let xo = x + n * texel;
     let point = u32(li.position_kind.w) == 1u;
     let face = select(0u, cube_face(xo - pos), point);
-    let p = face_view(li, face) * vec4<f32>(xo, 1.0);
+    let tile = u32(li.shadow.x) + face;
+    let p = tile_view(views, tile) * vec4<f32>(xo, 1.0);
     if (p.w <= 0.0) {
         return 1.0;
     }
@@ -322,7 +320,6 @@ fn punctual_shadow_map(atlas: texture_2d<f32>, li: PunctualLight, x: vec3<f32>, 
         return 1.0;
     }
     let side = li.shadow.z;
-    let tile = u32(li.shadow.x) + face;
     let columns = max(u32(li.shadow.w), 1u);
     let origin = vec2<f32>(f32(tile % columns), f32(tile / columns)) * side;
     let uv = origin + vec2<f32>(ndc.x * 0.5 + 0.5, 0.5 - ndc.y * 0.5) * side - 0.5;

@@ -8,6 +8,7 @@
 @group(0) @binding(2) var<storage, read> materials: array<Material>;
 @group(0) @binding(3) var<storage, read> lights: array<PunctualLight>;
 @group(0) @binding(4) var light_shadows: texture_2d<f32>;
+@group(0) @binding(5) var tile_views: texture_2d<f32>;
 
 struct VertexOut {
     @builtin(position) clip: vec4<f32>,
@@ -52,7 +53,7 @@ fn extra_light(m: Material, x: vec3<f32>, n: vec3<f32>) -> vec3<f32> {
         if (cos_l > 0.0 && any(le[1] > vec3<f32>(0.0))) {
             var seen = 1.0;
             if (shadowed) {
-                seen = punctual_shadow_map(light_shadows, li, x, n);
+                seen = punctual_shadow_map(light_shadows, tile_views, li, x, n);
             }
             sum += le[1] * seen * cos_l * transmitted_always(m, cos_l);
         }

@@ -34,6 +34,7 @@
 // The coarse lattice's gathers (MODE_COARSE_GATHER): per sample the light with w = 1 where
 // one was gathered, then the coverage.
 @group(0) @binding(15) var<storage, read_write> coarse: array<vec4<f32>>;
+@group(0) @binding(16) var tile_views: texture_2d<f32>;
 
 // Diffuse `diffuse` and specular light from every extra punctual light (spot and point lights
 // with shadow tiles are shadowed).
@@ -43,7 +44,7 @@ fn extra_lights(m: Material, f0: vec3<f32>, diffuse: vec3<f32>, n: vec3<f32>, v:
         let li = lights[i];
         let le = punctual_light(li, x);
         if (any(le[1] > vec3<f32>(0.0))) {
-            sum += le[1] * punctual_shadow(light_shadows, li, x, n) * surface_light(m, f0, diffuse, n, v, le[0]);
+            sum += le[1] * punctual_shadow(light_shadows, tile_views, li, x, n) * surface_light(m, f0, diffuse, n, v, le[0]);
         }
     }
     return sum;

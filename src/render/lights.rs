@@ -32,11 +32,9 @@ pub struct GpuLight {
     pub axis_cos_outer: [f32; 4],
     /// x: cos of the inner angle.
     pub cone: [f32; 4],
-    /// World → each of the light's shadow tiles (a spot uses the first, a point light all six,
-    /// in `CUBE` order).
-    pub views: [[[f32; 4]; 4]; 6],
-    /// x: first shadow tile, −1 for none; y: a texel's size per unit of distance from the
-    /// light (sets the bias and normal offset); z: tile side; w: tiles per atlas row.
+    /// x: first shadow tile, −1 for none (a spot uses one, a point light six in `CUBE` order;
+    /// their cameras are in `shadow.tile_views`); y: a texel's size per unit of distance from
+    /// the light (sets the bias and normal offset); z: tile side; w: tiles per atlas row.
     pub shadow: [f32; 4],
 }
 
@@ -168,11 +166,7 @@ pub fn upload(device: &wgpu::Device, scene: &Scene) -> wgpu::Buffer {
     let mut lights: Vec<GpuLight> = scene.file.lights.iter().map(gpu_light).collect();
     let columns = crate::render::pass::shadow::atlas_columns(shadow_tiles(scene).len());
     for (i, first, v) in shadowed_lights(scene) {
-        let g = &mut lights[i];
-        for (slot, m) in g.views.iter_mut().zip(&v.view_projs) {
-            *slot = m.to_cols_array_2d();
-        }
-        g.shadow = [first as f32, v.texel, TILE as f32, columns as f32];
+        lights[i].shadow = [first as f32, v.texel, TILE as f32, columns as f32];
     }
     if lights.is_empty() {
         lights.push(GpuLight::default());
@@ -182,6 +176,42 @@ pub fn upload(device: &wgpu::Device, scene: &Scene) -> wgpu::Buffer {
         contents: bytemuck::cast_slice(&lights),
         usage: wgpu::BufferUsages::STORAGE,
     })
+}
+
+/// Every shadow tile's world → clip matrix, one row of four rgba32float texels (its columns)
+/// per tile in atlas order (`shadow.tile_views`). A texture rather than a field of each light:
+/// the cube face differs from pixel to pixel, and a software adapter fetches texels for a whole
+/// SIMD row at once where it reads a matrix picked per lane from a buffer one lane at a time
+/// (gallery's extra lights cost 545 ms of a 710 ms opaque shading pass so, 640x480, lavapipe).
+pub fn upload_tile_views(
+    device: &wgpu::Device,
+    queue: &wgpu::Queue,
+    scene: &Scene,
+) -> wgpu::Texture {
+    let tiles = shadow_tiles(scene);
+    let mut texels: Vec<[[f32; 4]; 4]> = tiles.iter().map(|(m, _)| m.to_cols_array_2d()).collect();
+    if texels.is_empty() {
+        texels.push([[0.0; 4]; 4]);
+    }
+    device.create_texture_with_data(
+        queue,
+        &wgpu::TextureDescriptor {
+            label: Some("shadow.tile_views"),
+            size: wgpu::Extent3d {
+                width: 4,
+                height: texels.len() as u32,
+                depth_or_array_layers: 1,
+            },
+            mip_level_count: 1,
+            sample_count: 1,
+            dimension: wgpu::TextureDimension::D2,
+            format: wgpu::TextureFormat::Rgba32Float,
+            usage: wgpu::TextureUsages::TEXTURE_BINDING,
+            view_formats: &[],
+        },
+        wgpu::util::TextureDataOrder::LayerMajor,
+        bytemuck::cast_slice(&texels),
+    )
 }
 
 #[cfg(test)]

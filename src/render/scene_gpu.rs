@@ -67,6 +67,8 @@ impl SceneGpu {
         // The photons test the key light's map and carry the extra lights' light.
         maps.buffer("materials.scene", materials.clone());
         maps.buffer("lights.scene", super::lights::upload(device, &scene));
+        let tile_views = super::lights::upload_tile_views(device, queue, &scene);
+        maps.texture("shadow.tile_views", tile_views);
         let photons = if scene.has_translucency() {
             Some(photon_pass.create_map(device, pipelines, &maps)?)
         } else {

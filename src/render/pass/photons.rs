@@ -32,6 +32,7 @@ pub const PASS: PassDecl = PassDecl {
         read("materials.scene"),
         read("lights.scene"),
         texture("shadow.atlas"),
+        texture("shadow.tile_views"),
     ],
     attachments: &[
         "photons.position",
@@ -124,7 +125,7 @@ impl PhotonPass {
 
     /// Allocates a scene's photon map; `materials` must mark every translucent material.
     /// `shared` holds the scene's `materials.scene`, `lights.scene`, and its shadow maps
-    /// (`shadow.depth`, `shadow.atlas`).
+    /// (`shadow.depth`, `shadow.atlas`, `shadow.tile_views`).
     pub fn create_map(
         &self,
         device: &wgpu::Device,

@@ -26,6 +26,7 @@ pub const PASS: PassDecl = PassDecl {
         read("lights.scene"),
         texture("shadow.atlas"),
         write("shade.coarse"),
+        texture("shadow.tile_views"),
     ],
     attachments: &[],
     entry_points: &["shade_list", "shade_grid", "gather_coarse"],
