@@ -6,7 +6,7 @@
 // foveation::reconstruct::reconstruct.
 
 @group(0) @binding(1) var<storage, read> color: array<vec4<f32>>;
-@group(0) @binding(2) var<storage, read> nearest: array<u32>;
+@group(0) @binding(2) var nearest: texture_2d<u32>;
 @group(0) @binding(3) var albedo_tex: texture_2d<f32>;
 @group(0) @binding(4) var<storage, read_write> out_resolved: array<vec4<f32>>;
 @group(0) @binding(5) var normal_distance: texture_2d<f32>;
@@ -31,7 +31,7 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
         out_resolved[k] = vec4<f32>(frame.background, 1.0);
         return;
     }
-    let s = nearest[k];
+    let s = textureLoad(nearest, p, 0).x;
     if (s == NO_SEED) {
         // No sample within jump-flooding reach (a sliver of the object far from every sample):
         // shade the pixel itself. Rare by construction of the reach, so cheap.
@@ -56,7 +56,7 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
             if (!covered(q)) {
                 continue;
             }
-            let sq = nearest[index_of(q)];
+            let sq = textureLoad(nearest, q, 0).x;
             if (sq == NO_SEED) {
                 continue;
             }

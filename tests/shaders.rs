@@ -58,6 +58,28 @@ fn shader_bindings(
             (naga::AddressSpace::Handle, naga::TypeInner::Image { arrayed: true, .. }) => {
                 Access::TextureArray
             }
+            (
+                naga::AddressSpace::Handle,
+                naga::TypeInner::Image {
+                    class:
+                        naga::ImageClass::Storage {
+                            format: naga::StorageFormat::R32Uint,
+                            ..
+                        },
+                    ..
+                },
+            ) => Access::WriteUint,
+            (
+                naga::AddressSpace::Handle,
+                naga::TypeInner::Image {
+                    class:
+                        naga::ImageClass::Sampled {
+                            kind: naga::ScalarKind::Uint,
+                            ..
+                        },
+                    ..
+                },
+            ) => Access::UintTexture,
             (naga::AddressSpace::Handle, naga::TypeInner::Image { .. }) => Access::Texture,
             (naga::AddressSpace::Handle, naga::TypeInner::Sampler { .. }) => Access::Sampler,
             (space, ty) => panic!("{}: unexpected binding {space:?} {ty:?}", decl.label),

@@ -21,6 +21,10 @@ pub enum Access {
     Layers,
     /// `texture_storage_2d_array<rgba32float, write>`: the pass writes it.
     WriteLayers,
+    /// `texture_2d<u32>` read with `textureLoad`.
+    UintTexture,
+    /// `texture_storage_2d<r32uint, write>`: the pass writes it.
+    WriteUint,
     /// A filtering `sampler`.
     Sampler,
 }
@@ -28,7 +32,10 @@ pub enum Access {
 impl Access {
     /// Whether a pass with this binding writes the resource.
     pub fn writes(self) -> bool {
-        matches!(self, Access::ReadWrite | Access::WriteLayers)
+        matches!(
+            self,
+            Access::ReadWrite | Access::WriteLayers | Access::WriteUint
+        )
     }
 
     /// The bind group layout entry at binding number `i`.
@@ -42,6 +49,8 @@ impl Access {
             Access::TextureArray => gpu::texture_array(i),
             Access::Layers => gpu::layers(i),
             Access::WriteLayers => gpu::write_layers(i),
+            Access::UintTexture => gpu::texture(i, wgpu::TextureSampleType::Uint),
+            Access::WriteUint => gpu::write_uint(i),
             Access::Sampler => gpu::sampler(i),
         }
     }
@@ -100,6 +109,18 @@ pub const fn write_layers(name: &'static str) -> Binding {
     Binding {
         name,
         access: Access::WriteLayers,
+    }
+}
+pub const fn uint_texture(name: &'static str) -> Binding {
+    Binding {
+        name,
+        access: Access::UintTexture,
+    }
+}
+pub const fn write_uint(name: &'static str) -> Binding {
+    Binding {
+        name,
+        access: Access::WriteUint,
     }
 }
 pub const fn sampler(name: &'static str) -> Binding {

@@ -15,8 +15,8 @@ use super::gpu;
 use super::timer::PassTimer;
 
 pub use super::binding::{
-    dynamic_uniform, layers, read, sampler, texture, texture_array, uniform, write, write_layers,
-    Access, Binding,
+    dynamic_uniform, layers, read, sampler, texture, texture_array, uint_texture, uniform, write,
+    write_layers, write_uint, Access, Binding,
 };
 
 /// Everything the graph needs to know about a pass, stated once beside its shader.
@@ -165,7 +165,12 @@ impl Resources {
             let resource = match (self.map.get(name).ok_or(missing)?, b.access) {
                 (
                     Resource::Texture(_, view),
-                    Access::Texture | Access::TextureArray | Access::Layers | Access::WriteLayers,
+                    Access::Texture
+                    | Access::TextureArray
+                    | Access::Layers
+                    | Access::WriteLayers
+                    | Access::UintTexture
+                    | Access::WriteUint,
                 ) => wgpu::BindingResource::TextureView(view),
                 (Resource::Sampler(s), Access::Sampler) => wgpu::BindingResource::Sampler(s),
                 (Resource::Buffer(buf), Access::DynamicUniform { size }) => {

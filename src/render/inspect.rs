@@ -1,5 +1,6 @@
 //! Reading a stream's intermediate images back for tests and diagnostics.
 
+use super::pass::jfa;
 use super::pass::photons::SIDE as PHOTON_SIDE;
 use super::renderer::Renderer;
 use super::request::Inspection;
@@ -41,9 +42,12 @@ impl Renderer {
             probability: f32s(buf("sampling.probability")?),
             flags: u32s(buf("sampling.flags")?),
             seeds: u32s(buf("sampling.seeds")?),
-            nearest: u32s(
-                buf(t.routes.resolve("jfa.nearest")).or_else(|_| buf("jfa.seeds[ping]"))?,
-            ),
+            nearest: u32s(read_texture(
+                &self.gpu,
+                t.texture(t.routes.resolve("jfa.nearest"))
+                    .or_else(|_| t.texture(jfa::PING))?,
+                4,
+            )?),
             color: quads(buf("shade.color")?),
             resolved: quads(buf("resolve.color")?),
             albedo: bytemuck::pod_collect_to_vec(&read_texture(

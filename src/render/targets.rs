@@ -21,8 +21,6 @@ const PER_PIXEL: &[(&str, u64)] = &[
     ("sampling.seeds", 4),
     ("shade.color", 16),
     ("history.color", 16),
-    ("jfa.seeds[ping]", 4),
-    ("jfa.seeds[pong]", 4),
     ("resolve.color", 16),
     ("dof.color", 16),
     // Packed RGBA8 rows, exactly the output image.
@@ -55,8 +53,9 @@ pub struct FrameTargets {
 }
 
 /// The per-pixel textures: (name, format, usage).
-fn textures() -> [(&'static str, wgpu::TextureFormat, wgpu::TextureUsages); 6] {
+fn textures() -> [(&'static str, wgpu::TextureFormat, wgpu::TextureUsages); 8] {
     let attach = U::RENDER_ATTACHMENT | U::TEXTURE_BINDING | U::COPY_SRC;
+    let seeds = U::STORAGE_BINDING | U::TEXTURE_BINDING | U::COPY_SRC;
     [
         ("gbuffer.depth", gbuffer::DEPTH, U::RENDER_ATTACHMENT),
         ("gbuffer.normal_distance", gbuffer::NORMAL_DISTANCE, attach),
@@ -68,6 +67,8 @@ fn textures() -> [(&'static str, wgpu::TextureFormat, wgpu::TextureUsages); 6] {
             gbuffer::NORMAL_DISTANCE,
             U::TEXTURE_BINDING | U::COPY_DST,
         ),
+        (jfa::PING, wgpu::TextureFormat::R32Uint, seeds),
+        (jfa::PONG, wgpu::TextureFormat::R32Uint, seeds),
     ]
 }
 

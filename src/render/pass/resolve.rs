@@ -1,7 +1,9 @@
 //! Resolve pass: background, shaded and reused pixels as they are, the rest reconstructed from
 //! the jump-flooding result (nearest sample or windowed approximate Sibson).
 
-use crate::render::graph::{read, texture, uniform, write, GraphError, PassDecl, Recorder};
+use crate::render::graph::{
+    read, texture, uint_texture, uniform, write, GraphError, PassDecl, Recorder,
+};
 
 pub const PASS: PassDecl = PassDecl {
     label: "resolve",
@@ -10,7 +12,7 @@ pub const PASS: PassDecl = PassDecl {
     bindings: &[
         uniform("frame.uniform"),
         read("shade.color"),
-        read("jfa.nearest"),
+        uint_texture("jfa.nearest"),
         texture("gbuffer.albedo"),
         write("resolve.color"),
         texture("gbuffer.normal_distance"),
