@@ -17,7 +17,8 @@ pub struct SceneGpu {
     /// when the plan has shadows.
     pub shadow: Option<ShadowMap>,
     /// `materials.scene` (every translucent material marked subsurface, for the G-buffer and
-    /// the photon map), `scene.reach`, and `photons.nodes` with its texels (stand-ins without photons).
+    /// the photon map), `scene.reach`, and `photons.nodes` with its texels (stand-ins without
+    /// photons).
     pub resources: Resources,
     /// The scene's radiosity solve, when its plan asks for one, and the snapshot uploaded.
     pub radiosity: Option<RadiosityHandle>,
