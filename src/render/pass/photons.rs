@@ -271,10 +271,7 @@ impl PhotonPass {
         self.pyramid
             .record(queue, encoder, levels, &map.pyramid_bind, timer);
         let nodes = map.nodes().ok_or(missing("photons.nodes"))?;
-        let (texels, _) = map
-            .resources
-            .get_texture("photons.node_texels")
-            .ok_or(missing("photons.node_texels"))?;
+        let texels = map.node_texels().ok_or(missing("photons.node_texels"))?;
         pyramid::copy_to_texels(encoder, nodes, texels);
         map.built_for = Some(inputs);
         Ok(())
