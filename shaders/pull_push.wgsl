@@ -320,19 +320,31 @@ fn bilinear_weight(f: vec2<f32>, j: i32) -> f32 {
     return wxy.x * wxy.y;
 }
 
-// The coarse plane at a level-`l` cell centre from the level above, blended bilinearly and by
-// closeness to `key` = (depth, material) (depth < 0: the parents' own bilinear blend).
-fn coarse_plane(centre: vec2<f32>, l: u32, key: vec2<f32>) -> Cell {
+// The four parents around a cell: `q` the first (lower-left in bilinear order), `ps` their side.
+struct Parents {
+    p0: Plane,
+    p1: Plane,
+    p2: Plane,
+    p3: Plane,
+}
+
+fn load_parents(q: vec2<i32>, ps: f32) -> Parents {
+    return Parents(
+        load_plane(q, ps),
+        load_plane(q + vec2<i32>(1, 0), ps),
+        load_plane(q + vec2<i32>(0, 1), ps),
+        load_plane(q + vec2<i32>(1, 1), ps),
+    );
+}
+
+// The coarse plane at a level-`l` cell centre from its parents (`parent_base`'s, loaded by the
+// caller), blended bilinearly and by closeness to `key` = (depth, material) (depth < 0: the
+// parents' own bilinear blend). Empty for the top cell, which has no parents.
+fn coarse_plane(par: Parents, centre: vec2<f32>, l: u32, key: vec2<f32>) -> Cell {
     if (level.has_parent == 0u) {
         return empty_cell();
     }
-    let ps = f32(2u << l);
     let at = parent_base(centre, l);
-    let q = vec2<i32>(at.xy);
-    let p0 = load_plane(q, ps);
-    let p1 = load_plane(q + vec2<i32>(1, 0), ps);
-    let p2 = load_plane(q + vec2<i32>(0, 1), ps);
-    let p3 = load_plane(q + vec2<i32>(1, 1), ps);
     let k0 = bilinear_weight(at.zw, 0);
     let k1 = bilinear_weight(at.zw, 1);
     let k2 = bilinear_weight(at.zw, 2);
@@ -340,33 +352,63 @@ fn coarse_plane(centre: vec2<f32>, l: u32, key: vec2<f32>) -> Cell {
     var aim = key;
     if (aim.x < 0.0) {
         aim = vec2<f32>(
-            k0 * p0.depth + k1 * p1.depth + k2 * p2.depth + k3 * p3.depth,
-            k0 * p0.material + k1 * p1.material + k2 * p2.material + k3 * p3.material,
+            k0 * par.p0.depth + k1 * par.p1.depth + k2 * par.p2.depth + k3 * par.p3.depth,
+            k0 * par.p0.material + k1 * par.p1.material + k2 * par.p2.material + k3 * par.p3.material,
         );
     }
     var acc = blend_start();
-    blend_add(&acc, p0, k0, centre, aim);
-    blend_add(&acc, p1, k1, centre, aim);
-    blend_add(&acc, p2, k2, centre, aim);
-    blend_add(&acc, p3, k3, centre, aim);
+    blend_add(&acc, par.p0, k0, centre, aim);
+    blend_add(&acc, par.p1, k1, centre, aim);
+    blend_add(&acc, par.p2, k2, centre, aim);
+    blend_add(&acc, par.p3, k3, centre, aim);
     return blend_end(acc, aim);
 }
 
-// Push, level l ≥ 1 (the top cell too): the cell's plane from its moments and the coarse plane.
+// Push and push_pixels run one invocation per 2×2 block of cells (2·id − 1) + (0|1, 0|1):
+// the four share their parents (id − 1) + (0|1, 0|1), since a cell's centre lies a quarter of
+// a parent inside its bilinear square, so the parents' 16 texels are read once for four cells
+// rather than once for each (each cell's arithmetic is unchanged).
+fn quad_origin(id: vec2<u32>) -> vec2<i32> {
+    return vec2<i32>(id) * 2 - 1;
+}
+
+// The parents the quad at `id` shares, or nothing to load for the top cell.
+fn quad_parents(id: vec2<u32>) -> Parents {
+    if (level.has_parent == 0u) {
+        let z = vec3<f32>(0.0);
+        let none = Plane(z, 0.0, 0.0, 0.0, 0.0, z, z, 0.0, 0.0, vec2<f32>(0.0));
+        return Parents(none, none, none, none);
+    }
+    return load_parents(vec2<i32>(id) - 1, f32(2u << level.level));
+}
+
+// Push, level l ≥ 1 (the top cell too): each cell's plane from its moments and the coarse plane.
 @compute @workgroup_size(8, 8)
 fn push(@builtin(global_invocation_id) id: vec3<u32>) {
-    if (any(id.xy >= level.size)) {
+    let o = quad_origin(id.xy);
+    if (any(o >= vec2<i32>(level.size))) {
         return;
     }
-    let i = level.origin + id.xy;
+    let par = quad_parents(id.xy);
+    push_cell(o, par);
+    push_cell(o + vec2<i32>(1, 0), par);
+    push_cell(o + vec2<i32>(0, 1), par);
+    push_cell(o + vec2<i32>(1, 1), par);
+}
+
+fn push_cell(c: vec2<i32>, par: Parents) {
+    if (any(c < vec2<i32>(0)) || any(c >= vec2<i32>(level.size))) {
+        return;
+    }
+    let i = level.origin + vec2<u32>(c);
     let side = f32(1u << level.level);
-    let centre = (vec2<f32>(id.xy) + 0.5) * side;
+    let centre = (vec2<f32>(c) + 0.5) * side;
     let cell = load_cell(i);
     var aim = vec2<f32>(-1.0, 0.0);
     if (cell.w > 0.0) {
         aim = vec2<f32>(cell.depth, cell.material);
     }
-    let coarse = coarse_plane(centre, level.level, aim);
+    let coarse = coarse_plane(par, centre, level.level, aim);
     if (cell.w <= 0.0) {
         store_plane(i, coarse);
         return;
@@ -404,7 +446,18 @@ fn push(@builtin(global_invocation_id) id: vec3<u32>) {
 // Every pixel: background, its own sample, or level 1's planes times its albedo.
 @compute @workgroup_size(8, 8)
 fn push_pixels(@builtin(global_invocation_id) id: vec3<u32>) {
-    let p = vec2<i32>(id.xy);
+    let o = quad_origin(id.xy);
+    if (any(o >= frame_size())) {
+        return;
+    }
+    let par = quad_parents(id.xy);
+    push_pixel(o, par);
+    push_pixel(o + vec2<i32>(1, 0), par);
+    push_pixel(o + vec2<i32>(0, 1), par);
+    push_pixel(o + vec2<i32>(1, 1), par);
+}
+
+fn push_pixel(p: vec2<i32>, par: Parents) {
     if (!in_frame(p)) {
         return;
     }
@@ -422,7 +475,7 @@ fn push_pixels(@builtin(global_invocation_id) id: vec3<u32>) {
     let nd = textureLoad(normal_distance, p, 0);
     let albedo = textureLoad(albedo_tex, p, 0);
     let key = vec2<f32>(nd.w, material_of(albedo));
-    let coarse = coarse_plane(vec2<f32>(p) + 0.5, 0u, key);
+    let coarse = coarse_plane(par, vec2<f32>(p) + 0.5, 0u, key);
     var lit = coarse.c;
     if (coarse.lo <= coarse.hi) {
         lit = clamp(lit, vec3<f32>(coarse.lo), vec3<f32>(coarse.hi));

@@ -164,6 +164,16 @@ fn route(f: &mut Recorder, l: u32, pulling: bool) {
     f.route("pull_push.planes_out", PLANES[own]);
 }
 
+/// Invocations a dispatch needs per axis: one per cell pulling, one per 2×2 block of cells
+/// sharing their parents pushing (blocks start at odd cells, so a side of n has n/2 + 1).
+fn dispatch_cells(entry: &str, size: [u32; 2]) -> [u32; 2] {
+    if entry.starts_with("push") {
+        size.map(|n| n / 2 + 1)
+    } else {
+        size
+    }
+}
+
 /// Fills the frame; from here on `frame.color` is the reconstructed colour.
 pub fn record(f: &mut Recorder) -> Result<(), GraphError> {
     let (width, height) = f.size;
@@ -178,7 +188,8 @@ pub fn record(f: &mut Recorder) -> Result<(), GraphError> {
     let mut dispatches = Vec::with_capacity(slots.len());
     for (i, (entry, s)) in slots.iter().enumerate() {
         route(f, s.level, entry.starts_with("pull"));
-        let size = DispatchSize::Groups(s.size[0].div_ceil(8), s.size[1].div_ceil(8), 1);
+        let [w, h] = dispatch_cells(entry, s.size);
+        let size = DispatchSize::Groups(w.div_ceil(8), h.div_ceil(8), 1);
         let mut d = f.dispatch(&PASS, entry, size)?;
         d.offsets = vec![(i as u64 * SLOT) as u32];
         dispatches.push(d);
