@@ -320,7 +320,8 @@ fn bilinear_weight(f: vec2<f32>, j: i32) -> f32 {
     return wxy.x * wxy.y;
 }
 
-// The four parents around a cell: `q` the first (lower-left in bilinear order), `ps` their side.
+// The four parents around a cell, in bilinear order from the one at `q` (smallest x and y);
+// `ps` is their side in pixels.
 struct Parents {
     p0: Plane,
     p1: Plane,
