@@ -1,5 +1,7 @@
 //! The bindings a pass declares: each resource's name and the WGSL form it is bound as.
 
+use wgpu::{TextureFormat, TextureViewDimension};
+
 use super::gpu;
 
 /// How a pass uses a bound resource; each maps to one WGSL declaration form.
@@ -48,9 +50,13 @@ impl Access {
             Access::Texture => gpu::texture(i, gpu::FLOAT),
             Access::TextureArray => gpu::texture_array(i),
             Access::Layers => gpu::layers(i),
-            Access::WriteLayers => gpu::write_layers(i),
+            Access::WriteLayers => {
+                gpu::write_storage(i, TextureFormat::Rgba32Float, TextureViewDimension::D2Array)
+            }
             Access::UintTexture => gpu::texture(i, wgpu::TextureSampleType::Uint),
-            Access::WriteUint => gpu::write_uint(i),
+            Access::WriteUint => {
+                gpu::write_storage(i, TextureFormat::R32Uint, TextureViewDimension::D2)
+            }
             Access::Sampler => gpu::sampler(i),
         }
     }

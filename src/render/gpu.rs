@@ -74,29 +74,20 @@ pub fn layers(binding: u32) -> wgpu::BindGroupLayoutEntry {
     }
 }
 
-/// A write-only `texture_storage_2d_array<rgba32float, write>`.
-pub fn write_layers(binding: u32) -> wgpu::BindGroupLayoutEntry {
+/// A write-only storage texture for compute passes: `texture_storage_2d<F, write>` or, with
+/// `D2Array`, `texture_storage_2d_array<F, write>`.
+pub fn write_storage(
+    binding: u32,
+    format: wgpu::TextureFormat,
+    view_dimension: wgpu::TextureViewDimension,
+) -> wgpu::BindGroupLayoutEntry {
     wgpu::BindGroupLayoutEntry {
         binding,
         visibility: wgpu::ShaderStages::COMPUTE,
         ty: wgpu::BindingType::StorageTexture {
             access: wgpu::StorageTextureAccess::WriteOnly,
-            format: wgpu::TextureFormat::Rgba32Float,
-            view_dimension: wgpu::TextureViewDimension::D2Array,
-        },
-        count: None,
-    }
-}
-
-/// A write-only `texture_storage_2d<r32uint, write>`.
-pub fn write_uint(binding: u32) -> wgpu::BindGroupLayoutEntry {
-    wgpu::BindGroupLayoutEntry {
-        binding,
-        visibility: wgpu::ShaderStages::COMPUTE,
-        ty: wgpu::BindingType::StorageTexture {
-            access: wgpu::StorageTextureAccess::WriteOnly,
-            format: wgpu::TextureFormat::R32Uint,
-            view_dimension: wgpu::TextureViewDimension::D2,
+            format,
+            view_dimension,
         },
         count: None,
     }
