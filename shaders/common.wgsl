@@ -372,7 +372,15 @@ const INVALID_AGE: f32 = 65000.0;
 
 @group(0) @binding(0) var<uniform> frame: Frame;
 
+// A pipeline built for one frame mode (`graph::Recorder::dispatch_specialised`) has the mode
+// bits as a constant, so the code of every mode it is not in is dropped when it is compiled; one
+// that is not reads them from the frame uniforms.
+override SPECIALISED_MODE: u32 = NOT_SPECIALISED;
+
 fn has_mode(bit: u32) -> bool {
+    if (SPECIALISED_MODE != NOT_SPECIALISED) {
+        return (SPECIALISED_MODE & bit) != 0u;
+    }
     return (frame.mode & bit) != 0u;
 }
 

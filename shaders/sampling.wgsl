@@ -213,6 +213,32 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
     decide(base + vec2<i32>(1, 1), f.w, s.w);
 }
 
+// Where the surface point seen through pixel centre `centre` at distance `d` was on screen last
+// frame (off screen when it was behind last frame's eye).
+fn reprojected(centre: vec2<f32>, d: f32) -> vec2<f32> {
+    let world = frame.eye + view_ray(centre) * d;
+    let prev_clip = frame.prev_view_proj * vec4<f32>(world, 1.0);
+    if (prev_clip.w <= 1e-6) {
+        return vec2<f32>(-1e9);
+    }
+    let ndc = prev_clip.xy / prev_clip.w;
+    return vec2<f32>((ndc.x * 0.5 + 0.5) * f32(frame.width), (0.5 - ndc.y * 0.5) * f32(frame.height));
+}
+
+// Eq. 4 with |x| and a relative tolerance: is last frame's surface at `prev` the one seen
+// through pixel p at distance d now? The stored depth is last frame's Euclidean distance from
+// last frame's eye. CPU twin: foveation::reprojection::cache_hit.
+fn history_hit(p: vec2<i32>, prev: vec2<f32>, d: f32) -> bool {
+    let uv = prev / vec2<f32>(frame_size());
+    if (any(uv < vec2<f32>(0.0)) || any(uv >= vec2<f32>(1.0))) {
+        return false;
+    }
+    let prev_distance = textureLoad(history_normal_distance, vec2<i32>(floor(prev)), 0).w;
+    let world = frame.eye + view_ray(vec2<f32>(p) + 0.5) * d;
+    let now = distance(world, frame.prev_eye);
+    return abs(prev_distance - now) < frame.depth_epsilon * max(now, 1e-6);
+}
+
 // Pixel p's probability (from its acuity term `acuity` and saliency `salient`), sample
 // decision and reprojection.
 fn decide(p: vec2<i32>, acuity: f32, salient: f32) {
@@ -231,13 +257,11 @@ fn decide(p: vec2<i32>, acuity: f32, salient: f32) {
         return;
     }
     let centre = vec2<f32>(p) + 0.5;
-    // Where this surface point was on screen last frame (static geometry: only the camera moves).
-    let world = frame.eye + view_ray(centre) * nd.w;
-    let prev_clip = frame.prev_view_proj * vec4<f32>(world, 1.0);
-    var prev = vec2<f32>(-1e9);
-    if (prev_clip.w > 1e-6) {
-        let ndc = prev_clip.xy / prev_clip.w;
-        prev = vec2<f32>((ndc.x * 0.5 + 0.5) * f32(frame.width), (0.5 - ndc.y * 0.5) * f32(frame.height));
+    // Where this surface point was on screen last frame (static geometry: only the camera
+    // moves, so with a still camera it was here).
+    var prev = centre;
+    if (!has_mode(MODE_STILL_CAMERA)) {
+        prev = reprojected(centre, nd.w);
     }
     var f = acuity;
     if (has_mode(MODE_SALIENCY) && f < 1.0) {
@@ -279,19 +303,19 @@ fn decide(p: vec2<i32>, acuity: f32, salient: f32) {
         flags |= FLAG_SAMPLED;
         seed = pack_seed(p);
     } else if (has_mode(MODE_REPROJECTION) && frame.has_history != 0u) {
-        // Eq. 4 with |x| and a relative tolerance; the stored depth is last frame's Euclidean
-        // distance from last frame's eye.
-        let uv = prev / vec2<f32>(frame_size());
-        if (all(uv >= vec2<f32>(0.0)) && all(uv < vec2<f32>(1.0))) {
-            let q = vec2<i32>(floor(prev));
-            let prev_distance = textureLoad(history_normal_distance, q, 0).w;
-            let now = distance(world, frame.prev_eye);
-            let old = history_color[index_of(q)];
-            if (abs(prev_distance - now) < frame.depth_epsilon * max(now, 1e-6) && old.a < f32(frame.max_history_age)) {
-                flags |= FLAG_REUSED;
-                seed = pack_seed(p);
-                color = vec4<f32>(old.rgb, old.a + 1.0);
-            }
+        // A miss keeps INVALID_AGE, above any age cap (the knob stops at 1000).
+        var old = vec4<f32>(0.0, 0.0, 0.0, INVALID_AGE);
+        if (has_mode(MODE_STILL_CAMERA)) {
+            // Same view, same static geometry: last frame's surface at p is this one, so
+            // `history_hit` would pass; its reprojection and texture read are spared.
+            old = history_color[k];
+        } else if (history_hit(p, prev, nd.w)) {
+            old = history_color[index_of(vec2<i32>(floor(prev)))];
+        }
+        if (old.a < f32(frame.max_history_age)) {
+            flags |= FLAG_REUSED;
+            seed = pack_seed(p);
+            color = vec4<f32>(old.rgb, old.a + 1.0);
         }
     }
     out_probability[k] = f;

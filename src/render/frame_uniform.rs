@@ -72,12 +72,14 @@ pub(super) fn frame_uniform(
     };
     let s = &req.settings;
     let fov = &s.foveation;
+    let still = history && prev_view_proj == view_proj && prev_eye == eye;
     let mode = mode_bits(s)
         | if super::frame::coarse_gather(s, t.needs_dipole) {
             MODE_COARSE_GATHER
         } else {
             0
-        };
+        }
+        | if still { MODE_STILL_CAMERA } else { 0 };
     let viewing = Viewing::new(req.display, w, h);
     let gaze_px = viewing.to_pixels(req.gaze.map(f64::from));
     let w_min = viewing.pixel_angle_deg();

@@ -177,6 +177,7 @@ pub fn compute_pipeline(
     module: &wgpu::ShaderModule,
     entry_point: &str,
     layout: &wgpu::BindGroupLayout,
+    constants: &[(&str, f64)],
 ) -> wgpu::ComputePipeline {
     let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
         label: Some(label),
@@ -188,7 +189,10 @@ pub fn compute_pipeline(
         layout: Some(&pipeline_layout),
         module,
         entry_point: Some(entry_point),
-        compilation_options: Default::default(),
+        compilation_options: wgpu::PipelineCompilationOptions {
+            constants,
+            ..Default::default()
+        },
         cache: None,
     })
 }
@@ -254,7 +258,7 @@ impl FramePass {
     ) -> FramePass {
         let module = shader(device, label, source);
         let layout = layout(device, label, entries);
-        let pipeline = compute_pipeline(device, label, &module, "main", &layout);
+        let pipeline = compute_pipeline(device, label, &module, "main", &layout, &[]);
         FramePass {
             label,
             pipeline,

@@ -231,12 +231,16 @@ pub struct BindKey {
     pub resources: Vec<&'static str>,
 }
 
+/// Pipelines one entry point may have specialised for different frame modes.
+pub const MAX_SPECIALISED: usize = 8;
+
 /// Layouts and pipelines, built once per device from the declarations.
 pub struct Pipelines {
     device: wgpu::Device,
     layouts: HashMap<&'static str, wgpu::BindGroupLayout>,
     modules: HashMap<&'static str, wgpu::ShaderModule>,
-    compute: HashMap<(&'static str, &'static str), wgpu::ComputePipeline>,
+    /// By pass, entry point and the frame mode it was specialised for (if it was).
+    compute: HashMap<(&'static str, &'static str, Option<u32>), wgpu::ComputePipeline>,
     render: HashMap<&'static str, wgpu::RenderPipeline>,
 }
 
@@ -278,13 +282,38 @@ impl Pipelines {
         entry: &'static str,
         label: &'static str,
     ) -> wgpu::ComputePipeline {
-        if let Some(p) = self.compute.get(&(decl.label, entry)) {
+        self.compute_for(decl, entry, label, None)
+    }
+
+    /// The pipeline of `entry`, specialised for the frame mode `mode` when there is one: its
+    /// mode bits are then constants (`SPECIALISED_MODE` in common.wgsl), one pipeline per mode
+    /// met, built on first use.
+    pub fn compute_for(
+        &mut self,
+        decl: &PassDecl,
+        entry: &'static str,
+        label: &'static str,
+        mode: Option<u32>,
+    ) -> wgpu::ComputePipeline {
+        let key = (decl.label, entry, mode);
+        if let Some(p) = self.compute.get(&key) {
             return p.clone();
+        }
+        // Modes come from client settings: past a handful per entry point, the general
+        // pipeline serves the rest rather than the cache growing with every combination.
+        let specialised =
+            |k: &&(&str, &str, Option<u32>)| k.0 == decl.label && k.1 == entry && k.2.is_some();
+        if mode.is_some() && self.compute.keys().filter(specialised).count() >= MAX_SPECIALISED {
+            return self.compute_for(decl, entry, label, None);
         }
         let layout = self.layout(decl);
         let module = self.module(decl);
-        let p = gpu::compute_pipeline(&self.device, label, &module, entry, &layout);
-        self.compute.insert((decl.label, entry), p.clone());
+        let constants: Vec<(&str, f64)> = mode
+            .map(|m| ("SPECIALISED_MODE", f64::from(m)))
+            .into_iter()
+            .collect();
+        let p = gpu::compute_pipeline(&self.device, label, &module, entry, &layout, &constants);
+        self.compute.insert(key, p.clone());
         p
     }
 }
@@ -330,6 +359,8 @@ pub struct Recorder<'a> {
     pub routes: Routes,
     pub timer: &'a mut PassTimer,
     pub size: (u32, u32),
+    /// The frame's MODE_* bits, as its uniforms hold them.
+    pub mode: u32,
 }
 
 impl Recorder<'_> {
@@ -393,9 +424,31 @@ impl Recorder<'_> {
         entry: &'static str,
         size: DispatchSize,
     ) -> Result<Dispatch, GraphError> {
+        self.dispatch_mode(decl, entry, size, None)
+    }
+
+    /// A dispatch whose pipeline is specialised for this frame's mode bits: branches on modes
+    /// the frame is not in cost nothing, which on a software adapter, where all of a shader's
+    /// code shapes its cost, measured a third off the sampling pass (docs/foveation.md).
+    pub fn dispatch_specialised(
+        &mut self,
+        decl: &PassDecl,
+        entry: &'static str,
+        size: DispatchSize,
+    ) -> Result<Dispatch, GraphError> {
+        self.dispatch_mode(decl, entry, size, Some(self.mode))
+    }
+
+    fn dispatch_mode(
+        &mut self,
+        decl: &PassDecl,
+        entry: &'static str,
+        size: DispatchSize,
+        mode: Option<u32>,
+    ) -> Result<Dispatch, GraphError> {
         let label = if entry == "main" { decl.label } else { entry };
         Ok(Dispatch {
-            pipeline: self.pipelines.compute(decl, entry, label),
+            pipeline: self.pipelines.compute_for(decl, entry, label, mode),
             bind_group: self.bind_group(decl)?,
             offsets: Vec::new(),
             size,

@@ -182,6 +182,7 @@ impl Renderer {
         self.gpu
             .queue
             .write_buffer(buffer, 0, bytemuck::bytes_of(&uniform));
+        self.targets[ti].1.mode = uniform.mode;
         Ok(())
     }
 
@@ -226,6 +227,7 @@ impl Renderer {
             },
             timer: &mut self.timer,
             size: (req.width, req.height),
+            mode: t.mode,
         };
         match part {
             Part::Whole => frame::record(&mut recorder, &plan, &sg.mesh)?,

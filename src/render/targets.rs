@@ -46,6 +46,8 @@ pub struct FrameTargets {
     pub prev_eye: glam::Vec3,
     pub has_history: bool,
     pub frame_index: u32,
+    /// The MODE_* bits of the frame uniforms last written (specialised pipelines follow them).
+    pub mode: u32,
     /// The scene plan at this size gives some material its subsurface rungs.
     pub needs_dipole: bool,
     /// What these targets take on the GPU, bytes ([`FrameTargets::bytes_for`]).
@@ -184,6 +186,7 @@ impl FrameTargets {
             prev_eye: glam::Vec3::ZERO,
             has_history: false,
             frame_index: 0,
+            mode: 0,
             needs_dipole,
             bytes: FrameTargets::bytes_for(width, height),
         }

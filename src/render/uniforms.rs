@@ -29,6 +29,11 @@ pub const MODE_DEMODULATED: u32 = 1024;
 pub const MODE_EDGES_AT_MAR: u32 = 2048;
 /// The photon rungs gather on the coarse lattice and interpolate (`shade.wgsl`, `gather_coarse`).
 pub const MODE_COARSE_GATHER: u32 = 4096;
+/// The camera has not moved since the last frame (and there is one): the scene's geometry is
+/// static, so every pixel reprojects onto itself and the reprojection is skipped.
+pub const MODE_STILL_CAMERA: u32 = 8192;
+/// `SPECIALISED_MODE` of a pipeline that reads the mode bits from the frame uniforms.
+pub const NOT_SPECIALISED: u32 = u32::MAX;
 
 /// Per-pixel state written by the sampling pass.
 pub const FLAG_COVERED: u32 = 1;
@@ -51,6 +56,8 @@ pub fn constants() -> Vec<(&'static str, u32)> {
         ("MODE_DEMODULATED", MODE_DEMODULATED),
         ("MODE_EDGES_AT_MAR", MODE_EDGES_AT_MAR),
         ("MODE_COARSE_GATHER", MODE_COARSE_GATHER),
+        ("MODE_STILL_CAMERA", MODE_STILL_CAMERA),
+        ("NOT_SPECIALISED", NOT_SPECIALISED),
         ("FLAG_COVERED", FLAG_COVERED),
         ("LOBE_TABLE", crate::optics::specular::ALBEDO_TABLE as u32),
         ("FLAG_SAMPLED", FLAG_SAMPLED),
