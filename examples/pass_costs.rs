@@ -1,8 +1,9 @@
 //! Per-pass GPU time of a few configurations on one scene, interleaved frame by frame, without
 //! the bench's reference renders: a quick, low-noise check of a pass's cost while changing it.
 //!
-//! `cargo run --release --example pass_costs -- [SCENE] [WxH] [FRAMES] [CONFIG,...]`
-//! (configuration names as `fovea bench --sweep` takes them).
+//! `cargo run --release --example pass_costs -- [SCENE] [WxH] [FRAMES] [CONFIG,...] [moving]`
+//! (configuration names as `fovea bench --sweep` takes them). `moving` nudges the camera every
+//! frame (1 mm sideways), so nothing that holds only for a still camera is reused.
 
 use std::collections::BTreeMap;
 
@@ -21,6 +22,7 @@ fn main() -> Result<()> {
     let frames: usize = args.get(2).map_or(Ok(12), |s| s.parse())?;
     let configs = fovea::bench::sweep(args.get(3).map_or("full,balanced", String::as_str))
         .map_err(anyhow::Error::msg)?;
+    let moving = args.get(4).is_some_and(|a| a == "moving");
     let mut r = Renderer::new()?;
     let mut times: Vec<BTreeMap<String, Vec<f64>>> = vec![BTreeMap::new(); configs.len()];
     for f in 0..frames + 2 {
@@ -28,6 +30,11 @@ fn main() -> Result<()> {
             let mut req = FrameRequest::new(scene, w, h);
             req.settings = c.settings.clone();
             req.stream = i as u64 + 1;
+            if moving {
+                let mut camera = r.load_scene(scene)?.file.camera;
+                camera.eye[0] += 1e-3 * f as f32;
+                req.camera = Some(camera);
+            }
             let frame = r.render(&req)?;
             if f < 2 {
                 continue;

@@ -11,6 +11,8 @@
 @group(0) @binding(7) var<storage, read_write> out_flags: array<u32>;
 @group(0) @binding(8) var<storage, read_write> out_color: array<vec4<f32>>;
 @group(0) @binding(9) var<storage, read_write> out_seeds: array<u32>;
+// Each pixel's saliency, kept for the frames after this one while the G-buffer stays the same.
+@group(0) @binding(10) var<storage, read_write> saliency_cache: array<f32>;
 
 fn screen_point(p: vec2<f32>) -> vec3<f32> {
     let s = vec2<f32>(frame_size());
@@ -175,6 +177,31 @@ fn saliency_quad(base: vec2<i32>) -> vec4<f32> {
     return vec4<f32>(edges_saliency(e00), edges_saliency(e10), edges_saliency(e01), edges_saliency(e11));
 }
 
+// The four pixels of the quad at `base` in x, y, z, w order; a pixel past the frame has none.
+fn quad_pixel(base: vec2<i32>, i: i32) -> vec2<i32> {
+    return base + vec2<i32>(i & 1, i >> 1u);
+}
+
+fn store_saliency(base: vec2<i32>, s: vec4<f32>) {
+    for (var i = 0; i < 4; i++) {
+        let p = quad_pixel(base, i);
+        if (in_frame(p)) {
+            saliency_cache[index_of(p)] = s[i];
+        }
+    }
+}
+
+fn cached_saliency(base: vec2<i32>) -> vec4<f32> {
+    var s = vec4<f32>(0.0);
+    for (var i = 0; i < 4; i++) {
+        let p = quad_pixel(base, i);
+        if (in_frame(p)) {
+            s[i] = saliency_cache[index_of(p)];
+        }
+    }
+    return s;
+}
+
 fn white_noise(p: vec2<u32>) -> f32 {
     var h = p.x * 0x8da6b343u ^ p.y * 0xd8163841u ^ frame.frame_index * 0xcb1ab31fu;
     h = (h ^ (h >> 16u)) * 0x7feb352du;
@@ -202,10 +229,14 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
         acuity_at(base + vec2<i32>(0, 1)),
         acuity_at(base + vec2<i32>(1, 1)),
     );
-    // Saliency only matters where acuity alone does not already ask for every pixel.
     var s = vec4<f32>(0.0);
-    if (has_mode(MODE_SALIENCY) && any(f < vec4<f32>(1.0))) {
+    if (has_mode(MODE_SALIENCY_CACHED)) {
+        s = cached_saliency(base);
+    } else if (has_mode(MODE_SALIENCY)) {
+        // Every quad, the fovea's too (where acuity alone asks for every pixel): a later frame
+        // may read it with the gaze elsewhere.
         s = saliency_quad(base);
+        store_saliency(base, s);
     }
     decide(base, f.x, s.x);
     decide(base + vec2<i32>(1, 0), f.y, s.y);

@@ -113,3 +113,25 @@ fn past_the_cap_the_general_pipeline_gives_the_same_frames() {
     }
     assert_ne!(forward[0].0, forward[1].0, "saliency changed nothing");
 }
+
+/// With the camera still and the settings unchanged, the sampling pass reads the saliency the
+/// first frame kept; the gaze moves over pixels that were in that frame's fovea, so a cache
+/// that skipped the fovea would show here.
+#[test]
+fn kept_saliency_gives_what_computing_it_gives() {
+    let mut r = renderer();
+    let gazes = [[0.5, 0.5], [0.25, 0.3], [0.75, 0.65], [0.5, 0.45]];
+    for (i, gaze) in gazes.into_iter().enumerate() {
+        let mut kept = foveated("balanced", 200, 150, gaze);
+        kept.stream = 1;
+        r.render(&kept).unwrap();
+        let mut fresh = kept.clone();
+        fresh.stream = 10 + i as u64;
+        r.render(&fresh).unwrap();
+        assert_eq!(
+            inspect(&r, &kept).probability,
+            inspect(&r, &fresh).probability,
+            "frame {i}, gaze {gaze:?}"
+        );
+    }
+}

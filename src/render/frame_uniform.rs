@@ -79,7 +79,12 @@ pub(super) fn frame_uniform(
         } else {
             0
         }
-        | if still { MODE_STILL_CAMERA } else { 0 };
+        | if still { MODE_STILL_CAMERA } else { 0 }
+        | if still && fov.saliency && t.prev_settings.as_ref() == Some(s) {
+            MODE_SALIENCY_CACHED
+        } else {
+            0
+        };
     let viewing = Viewing::new(req.display, w, h);
     let gaze_px = viewing.to_pixels(req.gaze.map(f64::from));
     let w_min = viewing.pixel_angle_deg();

@@ -202,6 +202,11 @@ impl Renderer {
             .ok_or_else(|| not_loaded(&req.scene))?;
         let (device, queue) = (&self.gpu.device, &self.gpu.queue);
         let t = &mut self.targets[ti].1;
+        if matches!(part, Part::Whole | Part::Prefix) {
+            // This part overwrites the saliency the last frame kept: until the frame finishes,
+            // no later frame may take what is there for the last frame's.
+            t.prev_settings = None;
+        }
         if let Part::Rows(a, b) = part {
             let offset = std::mem::offset_of!(FrameUniform, shade_rows) as u64;
             let buffer = t.buffer("frame.uniform")?;
@@ -238,20 +243,21 @@ impl Renderer {
         t.routes = recorder.routes;
         self.timer.resolve(&mut encoder);
         let submission = queue.submit(photon_encoder.into_iter().chain([encoder.finish()]));
-        device
-            .poll(wgpu::PollType::Wait {
-                submission_index: Some(submission.clone()),
-                timeout: None,
-            })
-            .map_err(|e| RenderError::Gpu(format!("waiting for the frame: {e}")))?;
+        let waited = device.poll(wgpu::PollType::Wait {
+            submission_index: Some(submission.clone()),
+            timeout: None,
+        });
+        // A validation error fails the submission too: it, not the wait, says what went wrong.
         if let Some(e) = pollster::block_on(scope.pop()) {
             return Err(RenderError::Gpu(e.to_string()));
         }
+        waited.map_err(|e| RenderError::Gpu(format!("waiting for the frame: {e}")))?;
         if matches!(part, Part::Whole | Part::Suffix) {
             let camera = req.camera.unwrap_or(sg.scene.file.camera);
             t.prev_view_proj = camera.view_proj(req.width, req.height);
             t.prev_eye = Vec3::from(camera.eye);
             t.has_history = true;
+            t.prev_settings = Some(req.settings.clone());
             t.frame_index = t.frame_index.wrapping_add(1);
         }
         Ok(submission)

@@ -19,6 +19,7 @@ const PER_PIXEL: &[(&str, u64)] = &[
     ("sampling.probability", 4),
     ("sampling.flags", 4),
     ("sampling.seeds", 4),
+    ("sampling.saliency", 4),
     ("shade.color", 16),
     ("history.color", 16),
     ("resolve.color", 16),
@@ -46,6 +47,9 @@ pub struct FrameTargets {
     pub prev_eye: glam::Vec3,
     pub has_history: bool,
     pub frame_index: u32,
+    /// The last frame's settings: with a still camera and the same settings its G-buffer, and
+    /// so its saliency, is this frame's.
+    pub prev_settings: Option<crate::settings::RenderSettings>,
     /// The MODE_* bits of the frame uniforms last written (specialised pipelines follow them).
     pub mode: u32,
     /// The scene plan at this size gives some material its subsurface rungs.
@@ -186,6 +190,7 @@ impl FrameTargets {
             prev_eye: glam::Vec3::ZERO,
             has_history: false,
             frame_index: 0,
+            prev_settings: None,
             mode: 0,
             needs_dipole,
             bytes: FrameTargets::bytes_for(width, height),

@@ -32,6 +32,9 @@ pub const MODE_COARSE_GATHER: u32 = 4096;
 /// The camera has not moved since the last frame (and there is one): the scene's geometry is
 /// static, so every pixel reprojects onto itself and the reprojection is skipped.
 pub const MODE_STILL_CAMERA: u32 = 8192;
+/// Still camera, same settings as the last frame: the G-buffer is the last frame's, so the
+/// sampling pass reads the saliency it kept instead of computing it again.
+pub const MODE_SALIENCY_CACHED: u32 = 16384;
 /// `SPECIALISED_MODE` of a pipeline that reads the mode bits from the frame uniforms.
 pub const NOT_SPECIALISED: u32 = u32::MAX;
 
@@ -57,6 +60,7 @@ pub fn constants() -> Vec<(&'static str, u32)> {
         ("MODE_EDGES_AT_MAR", MODE_EDGES_AT_MAR),
         ("MODE_COARSE_GATHER", MODE_COARSE_GATHER),
         ("MODE_STILL_CAMERA", MODE_STILL_CAMERA),
+        ("MODE_SALIENCY_CACHED", MODE_SALIENCY_CACHED),
         ("NOT_SPECIALISED", NOT_SPECIALISED),
         ("FLAG_COVERED", FLAG_COVERED),
         ("LOBE_TABLE", crate::optics::specular::ALBEDO_TABLE as u32),

@@ -21,6 +21,7 @@ pub const PASS: PassDecl = PassDecl {
         write("sampling.flags"),
         write("shade.color"),
         write("sampling.seeds"),
+        write("sampling.saliency"),
     ],
     attachments: &[],
     entry_points: &["main"],
