@@ -228,9 +228,20 @@ impl Plot for BenchPlot {
                 .label(name)
                 .legend(move |(x, y)| Circle::new((x + 10, y), size, c.filled()));
         }
+        // The legend goes to the corner that covers the fewest points (measured and ideal),
+        // and labels keep out of it.
+        let marks: Vec<(i32, i32)> = self
+            .points
+            .iter()
+            .map(|p| (p.frame_ms, p.flip))
+            .chain(ideal.iter().map(|(p, i)| (*i, p.flip)))
+            .map(|xy| chart.backend_coord(&xy))
+            .collect();
+        let (xs, ys) = chart.plotting_area().get_pixel_range();
+        let (corner, legend_box) = legend_corner(&marks, (xs.start, xs.end), (ys.start, ys.end));
         // Labels: presets first, then the rest of the front; each takes the first spot around
         // its point that overlaps no label already placed, or is left out.
-        let mut placed: Vec<(i32, i32, i32, i32)> = Vec::new();
+        let mut placed: Vec<(i32, i32, i32, i32)> = vec![legend_box];
         let mut labelled: Vec<&Point> = self.points.iter().filter(|p| p.preset).collect();
         labelled.extend(self.points.iter().filter(|p| p.pareto && !p.preset));
         for p in labelled {
@@ -269,14 +280,63 @@ impl Plot for BenchPlot {
                 ))
                 .map_err(err)?;
         }
-        legend(&mut chart, SeriesLabelPosition::UpperRight)?;
+        legend(&mut chart, corner)?;
         Ok(())
     }
 }
 
+/// Room the bench plot's legend takes (four entries), in pixels.
+const LEGEND_SIZE: (i32, i32) = (200, 85);
+
+/// The corner of the plotting area (x and y pixel ranges) whose legend-sized box holds the
+/// fewest of `marks`, the first of upper right, upper left, lower left, lower right on a tie,
+/// with that box (left, top, right, bottom).
+fn legend_corner(
+    marks: &[(i32, i32)],
+    xs: (i32, i32),
+    ys: (i32, i32),
+) -> (SeriesLabelPosition, (i32, i32, i32, i32)) {
+    let (w, h) = LEGEND_SIZE;
+    let (left, right) = (xs.0, xs.1 - w);
+    let (top, bottom) = (ys.0, ys.1 - h);
+    let corners = [
+        (SeriesLabelPosition::UpperRight, (right, top)),
+        (SeriesLabelPosition::UpperLeft, (left, top)),
+        (SeriesLabelPosition::LowerLeft, (left, bottom)),
+        (SeriesLabelPosition::LowerRight, (right, bottom)),
+    ];
+    let covered = |(x, y): (i32, i32)| {
+        marks
+            .iter()
+            .filter(|(mx, my)| (x - 8..x + w + 8).contains(mx) && (y - 8..y + h + 8).contains(my))
+            .count()
+    };
+    let (at, (x, y)) = corners
+        .into_iter()
+        .min_by_key(|(_, xy)| covered(*xy))
+        .unwrap_or((SeriesLabelPosition::UpperRight, (right, top)));
+    (at, (x, y, x + w, y + h))
+}
+
 #[cfg(test)]
 mod tests {
-    use super::tick_label;
+    use super::{legend_corner, tick_label};
+    use plotters::prelude::SeriesLabelPosition;
+
+    #[test]
+    fn the_legend_goes_where_the_points_are_not() {
+        use SeriesLabelPosition::{LowerLeft, UpperLeft, UpperRight};
+        let (xs, ys) = ((60, 960), (40, 600));
+        assert_eq!(legend_corner(&[], xs, ys).0, UpperRight);
+        assert_eq!(legend_corner(&[(900, 60)], xs, ys).0, UpperLeft);
+        let (at, b) = legend_corner(&[(900, 60), (80, 50)], xs, ys);
+        assert_eq!(at, LowerLeft);
+        assert_eq!(
+            (b.0, b.3),
+            (60, 600),
+            "the box sits in the lower-left corner"
+        );
+    }
 
     #[test]
     fn ticks_below_one_keep_their_digits() {
