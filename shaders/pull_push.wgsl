@@ -9,14 +9,15 @@
 @group(0) @binding(3) var albedo_tex: texture_2d<f32>;
 @group(0) @binding(5) var<storage, read_write> out_resolved: array<vec4<f32>>;
 @group(0) @binding(7) var normal_distance: texture_2d<f32>;
-// The pyramid lives in textures rather than storage buffers: a software adapter gathers a
+// The pyramid is read from textures rather than storage buffers: a software adapter gathers a
 // texel per lane at once but loads from a buffer one lane at a time, and each cell here reads
-// several neighbours. Levels alternate between two atlases (odd and even levels) so that a
-// dispatch reads one and writes the other; `_in` and `_out` are routed per dispatch.
-@group(0) @binding(4) var moments_out: texture_storage_2d_array<rgba32float, write>;
+// several neighbours. Levels alternate between two atlases (odd and even levels); `_in` is
+// routed per dispatch. A dispatch writes its level to a staging buffer instead (a storage
+// texture's store costs there seven times a buffer's), copied into the atlas after it.
+@group(0) @binding(4) var<storage, read_write> moments_staged: array<vec4<f32>>;
 @group(0) @binding(8) var moments_in: texture_2d_array<f32>;
 @group(0) @binding(9) var planes_in: texture_2d_array<f32>;
-@group(0) @binding(10) var planes_out: texture_storage_2d_array<rgba32float, write>;
+@group(0) @binding(10) var<storage, read_write> planes_staged: array<vec4<f32>>;
 
 // One level's dispatch: this level's size and corner in its atlas, and the same of its
 // neighbour level (pull: the children's level below; push: the parents' level above).
@@ -32,8 +33,9 @@ struct Level {
     floor: f32,
     depth_tolerance: f32,
     material_tolerance: f32,
-    pad0: u32,
-    pad1: u32,
+    // Texels a row of the staging buffers holds at this level.
+    row: u32,
+    pad: u32,
 }
 @group(0) @binding(6) var<uniform> level: Level;
 
@@ -75,23 +77,35 @@ fn load_cell(q: vec2<u32>) -> Cell {
     return Cell(a.rgb, a.a, b.xy, vec3<f32>(b.z, b.w, c.a), c.rgb, d.rgb, d.a, e.x, e.y, e.z, e.w, m);
 }
 
-fn store_cell(q: vec2<u32>, v: Cell) {
-    let p = vec2<i32>(q);
-    textureStore(moments_out, p, 0, vec4<f32>(v.c, v.w));
-    textureStore(moments_out, p, 1, vec4<f32>(v.mean, v.s.x, v.s.y));
-    textureStore(moments_out, p, 2, vec4<f32>(v.tx, v.s.z));
-    textureStore(moments_out, p, 3, vec4<f32>(v.ty, v.depth));
-    textureStore(moments_out, p, 4, vec4<f32>(v.lo, v.hi, v.material, v.depth_var));
-    textureStore(moments_out, p, 5, vec4<f32>(v.material_var, 0.0, 0.0, 0.0));
+// Where layer 0 of this level's cell `c` sits in a staging buffer, and how far apart layers are.
+fn staged(c: vec2<u32>) -> u32 {
+    return c.y * level.row + c.x;
+}
+fn staged_layer() -> u32 {
+    return level.size.y * level.row;
 }
 
-// A completed cell's plane: value and material spread, gradient, depth, range and material.
-fn store_plane(q: vec2<u32>, v: Cell) {
-    let p = vec2<i32>(q);
-    textureStore(planes_out, p, 0, vec4<f32>(v.c, v.material_var));
-    textureStore(planes_out, p, 1, vec4<f32>(v.tx, 0.0));
-    textureStore(planes_out, p, 2, vec4<f32>(v.ty, v.depth));
-    textureStore(planes_out, p, 3, vec4<f32>(v.lo, v.hi, v.material, v.depth_var));
+// The moments of this level's cell `c`, to the staging buffer.
+fn store_cell(c: vec2<u32>, v: Cell) {
+    let i = staged(c);
+    let n = staged_layer();
+    moments_staged[i] = vec4<f32>(v.c, v.w);
+    moments_staged[i + n] = vec4<f32>(v.mean, v.s.x, v.s.y);
+    moments_staged[i + 2u * n] = vec4<f32>(v.tx, v.s.z);
+    moments_staged[i + 3u * n] = vec4<f32>(v.ty, v.depth);
+    moments_staged[i + 4u * n] = vec4<f32>(v.lo, v.hi, v.material, v.depth_var);
+    moments_staged[i + 5u * n] = vec4<f32>(v.material_var, 0.0, 0.0, 0.0);
+}
+
+// This level's cell `c` completed, to the staging buffer: value and material spread,
+// gradient, depth, range and material.
+fn store_plane(c: vec2<u32>, v: Cell) {
+    let i = staged(c);
+    let n = staged_layer();
+    planes_staged[i] = vec4<f32>(v.c, v.material_var);
+    planes_staged[i + n] = vec4<f32>(v.tx, 0.0);
+    planes_staged[i + 2u * n] = vec4<f32>(v.ty, v.depth);
+    planes_staged[i + 3u * n] = vec4<f32>(v.lo, v.hi, v.material, v.depth_var);
 }
 
 // What the G-buffer alone predicts of a pixel's colour: the key light's Lambert term with the
@@ -198,7 +212,7 @@ fn pull_pixels(@builtin(global_invocation_id) id: vec3<u32>) {
         return;
     }
     let m = merge(child_pixel(id.xy, 0u), child_pixel(id.xy, 1u), child_pixel(id.xy, 2u), child_pixel(id.xy, 3u));
-    store_cell(level.origin + id.xy, m);
+    store_cell(id.xy, m);
 }
 
 // Child `i` (0..3, row-major) of cell `id` one level down (the `near` level), or an empty
@@ -218,7 +232,7 @@ fn pull(@builtin(global_invocation_id) id: vec3<u32>) {
         return;
     }
     let m = merge(child_cell(id.xy, 0u), child_cell(id.xy, 1u), child_cell(id.xy, 2u), child_cell(id.xy, 3u));
-    store_cell(level.origin + id.xy, m);
+    store_cell(id.xy, m);
 }
 
 // What a parent lends its children: its plane, depth, sample range, and its centre (pixels).
@@ -411,7 +425,7 @@ fn push_cell(c: vec2<i32>, par: Parents) {
     }
     let coarse = coarse_plane(par, centre, level.level, aim);
     if (cell.w <= 0.0) {
-        store_plane(i, coarse);
+        store_plane(vec2<u32>(c), coarse);
         return;
     }
     let lambda = level.ridge * cell.w * side * side;
@@ -441,7 +455,7 @@ fn push_cell(c: vec2<i32>, par: Parents) {
     out.material_var = cell.material_var;
     out.lo = min(cell.lo, coarse.lo);
     out.hi = max(cell.hi, coarse.hi);
-    store_plane(i, out);
+    store_plane(vec2<u32>(c), out);
 }
 
 // Every pixel: background, its own sample, or level 1's planes times its albedo.

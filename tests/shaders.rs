@@ -47,14 +47,6 @@ fn shader_bindings(
                     Access::Read
                 }
             }
-            (
-                naga::AddressSpace::Handle,
-                naga::TypeInner::Image {
-                    arrayed: true,
-                    class: naga::ImageClass::Storage { .. },
-                    ..
-                },
-            ) => Access::WriteLayers,
             (naga::AddressSpace::Handle, naga::TypeInner::Image { arrayed: true, .. }) => {
                 Access::TextureArray
             }

@@ -21,8 +21,6 @@ pub enum Access {
     TextureArray,
     /// `texture_2d_array<f32>` of 32-bit floats read with `textureLoad` (pyramid layers).
     Layers,
-    /// `texture_storage_2d_array<rgba32float, write>`: the pass writes it.
-    WriteLayers,
     /// `texture_2d<u32>` read with `textureLoad`.
     UintTexture,
     /// `texture_storage_2d<r32uint, write>`: the pass writes it.
@@ -34,10 +32,7 @@ pub enum Access {
 impl Access {
     /// Whether a pass with this binding writes the resource.
     pub fn writes(self) -> bool {
-        matches!(
-            self,
-            Access::ReadWrite | Access::WriteLayers | Access::WriteUint
-        )
+        matches!(self, Access::ReadWrite | Access::WriteUint)
     }
 
     /// The bind group layout entry at binding number `i`.
@@ -50,9 +45,6 @@ impl Access {
             Access::Texture => gpu::texture(i, gpu::FLOAT),
             Access::TextureArray => gpu::texture_array(i),
             Access::Layers => gpu::layers(i),
-            Access::WriteLayers => {
-                gpu::write_storage(i, TextureFormat::Rgba32Float, TextureViewDimension::D2Array)
-            }
             Access::UintTexture => gpu::texture(i, wgpu::TextureSampleType::Uint),
             Access::WriteUint => {
                 gpu::write_storage(i, TextureFormat::R32Uint, TextureViewDimension::D2)
@@ -109,12 +101,6 @@ pub const fn layers(name: &'static str) -> Binding {
     Binding {
         name,
         access: Access::Layers,
-    }
-}
-pub const fn write_layers(name: &'static str) -> Binding {
-    Binding {
-        name,
-        access: Access::WriteLayers,
     }
 }
 pub const fn uint_texture(name: &'static str) -> Binding {

@@ -16,7 +16,7 @@ use super::timer::PassTimer;
 
 pub use super::binding::{
     dynamic_uniform, layers, read, sampler, texture, texture_array, uint_texture, uniform, write,
-    write_layers, write_uint, Access, Binding,
+    write_uint, Access, Binding,
 };
 
 /// Everything the graph needs to know about a pass, stated once beside its shader.
@@ -168,7 +168,6 @@ impl Resources {
                     Access::Texture
                     | Access::TextureArray
                     | Access::Layers
-                    | Access::WriteLayers
                     | Access::UintTexture
                     | Access::WriteUint,
                 ) => wgpu::BindingResource::TextureView(view),
@@ -465,15 +464,7 @@ impl Recorder<'_> {
                 timestamp_writes: self.timer.compute(label),
             });
         for d in dispatches {
-            pass.set_pipeline(&d.pipeline);
-            pass.set_bind_group(0, &d.bind_group, &d.offsets);
-            match &d.size {
-                DispatchSize::Frame => pass.dispatch_workgroups(w.div_ceil(8), h.div_ceil(8), 1),
-                DispatchSize::Groups(x, y, z) => pass.dispatch_workgroups(*x, *y, *z),
-                DispatchSize::Indirect(buffer, offset) => {
-                    pass.dispatch_workgroups_indirect(buffer, *offset)
-                }
-            }
+            run(&mut pass, d, (w, h));
         }
     }
 
@@ -482,5 +473,18 @@ impl Recorder<'_> {
         let d = self.frame_dispatch(decl, "main")?;
         self.compute(decl.label, &[d]);
         Ok(())
+    }
+}
+
+/// Records one dispatch into `pass`; `size` is the frame's, for `DispatchSize::Frame`.
+pub fn run(pass: &mut wgpu::ComputePass<'_>, d: &Dispatch, (w, h): (u32, u32)) {
+    pass.set_pipeline(&d.pipeline);
+    pass.set_bind_group(0, &d.bind_group, &d.offsets);
+    match &d.size {
+        DispatchSize::Frame => pass.dispatch_workgroups(w.div_ceil(8), h.div_ceil(8), 1),
+        DispatchSize::Groups(x, y, z) => pass.dispatch_workgroups(*x, *y, *z),
+        DispatchSize::Indirect(buffer, offset) => {
+            pass.dispatch_workgroups_indirect(buffer, *offset)
+        }
     }
 }

@@ -99,11 +99,25 @@ fn pyramid(device: &wgpu::Device, r: &mut Resources, width: u32, height: u32) {
                 sample_count: 1,
                 dimension: wgpu::TextureDimension::D2,
                 format: wgpu::TextureFormat::Rgba32Float,
-                usage: U::STORAGE_BINDING | U::TEXTURE_BINDING,
+                usage: U::COPY_DST | U::TEXTURE_BINDING,
                 view_formats: &[],
             });
             r.texture_array(name, texture);
         }
+    }
+    let staged = [
+        (pull_push::MOMENTS_STAGED, pull_push::MOMENT_LAYERS),
+        (pull_push::PLANES_STAGED, pull_push::PLANE_LAYERS),
+    ];
+    for (name, layers) in staged {
+        let bytes = pull_push::staged_bytes(width, height, layers);
+        let staging = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some(name),
+            size: bytes,
+            usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
+            mapped_at_creation: false,
+        });
+        r.buffer(name, staging);
     }
 }
 

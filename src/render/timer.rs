@@ -77,6 +77,27 @@ impl PassTimer {
             })
     }
 
+    /// Times a run of compute passes as one under `label`: the slot reserved here takes its
+    /// start from the run's first pass and its end from its last (`part`).
+    pub fn span(&mut self, label: &'static str) -> Option<u32> {
+        self.slot(label).map(|(_, i)| i)
+    }
+
+    /// The timestamp writes of one pass of a `span`: the start on the first, the end on the last.
+    pub fn part(
+        &self,
+        span: Option<u32>,
+        first: bool,
+        last: bool,
+    ) -> Option<wgpu::ComputePassTimestampWrites<'_>> {
+        let (query_set, i) = (self.query_set.as_ref()?, span?);
+        (first || last).then_some(wgpu::ComputePassTimestampWrites {
+            query_set,
+            beginning_of_pass_write_index: first.then_some(i),
+            end_of_pass_write_index: last.then_some(i + 1),
+        })
+    }
+
     pub fn render(&mut self, label: &'static str) -> Option<wgpu::RenderPassTimestampWrites<'_>> {
         self.slot(label)
             .map(|(query_set, i)| wgpu::RenderPassTimestampWrites {

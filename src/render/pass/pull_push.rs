@@ -2,6 +2,9 @@
 //! up a pyramid of 2×2 cells, planes pushed back down, then every pixel filled. Replaces jump
 //! flooding and the resolve pass for those frames; O(N) work instead of N log N plus a window.
 //! The pyramid is kept in two texture atlases (odd and even levels); see the shader for why.
+//! Each dispatch writes its level to a staging buffer that is then copied into the atlas: on
+//! the software adapter a buffer store costs a seventh of a storage-texture store, and a copy
+//! is a memcpy.
 //! CPU twin: `foveation::pull_push`.
 
 use bytemuck::{Pod, Zeroable};
@@ -11,8 +14,8 @@ use crate::foveation::pull_push::{
     MATERIAL_TOLERANCE,
 };
 use crate::render::graph::{
-    dynamic_uniform, layers, read, texture, uniform, write, write_layers, DispatchSize, GraphError,
-    PassDecl, Recorder,
+    dynamic_uniform, layers, read, texture, uniform, write, DispatchSize, GraphError, PassDecl,
+    Recorder,
 };
 
 /// Uniform slots start at multiples of the device's offset alignment (256 by default).
@@ -26,6 +29,10 @@ pub const PLANE_LAYERS: u32 = 4;
 /// parity and writes the other.
 pub const MOMENTS: [&str; 2] = ["pull_push.moments[even]", "pull_push.moments[odd]"];
 pub const PLANES: [&str; 2] = ["pull_push.planes[even]", "pull_push.planes[odd]"];
+/// Where a dispatch writes its level before the copy into the atlas: layer by layer, row by
+/// row, `Level::row` texels a row.
+pub const MOMENTS_STAGED: &str = "pull_push.moments_staged";
+pub const PLANES_STAGED: &str = "pull_push.planes_staged";
 
 pub const PASS: PassDecl = PassDecl {
     label: "pull_push",
@@ -36,13 +43,13 @@ pub const PASS: PassDecl = PassDecl {
         read("shade.color"),
         read("sampling.flags"),
         texture("gbuffer.albedo"),
-        write_layers("pull_push.moments_out"),
+        write(MOMENTS_STAGED),
         write("resolve.color"),
         dynamic_uniform("pull_push.levels", std::mem::size_of::<Level>() as u64),
         texture("gbuffer.normal_distance"),
         layers("pull_push.moments_in"),
         layers("pull_push.planes_in"),
-        write_layers("pull_push.planes_out"),
+        write(PLANES_STAGED),
     ],
     attachments: &[],
     entry_points: &["pull_pixels", "pull", "push", "push_pixels"],
@@ -62,7 +69,9 @@ pub struct Level {
     floor: f32,
     depth_tolerance: f32,
     material_tolerance: f32,
-    pad: [u32; 2],
+    /// Texels a row of the staging buffers holds at this level (copies need 256-byte rows).
+    row: u32,
+    pad: u32,
 }
 
 /// Levels above the pixels the GPU keeps (at least one, so a 1×1 frame has a top cell).
@@ -106,6 +115,18 @@ pub fn pyramid_bytes(width: u32, height: u32) -> u64 {
         u64::from(w) * u64::from(h)
     };
     (texels(false) + texels(true)) * u64::from(MOMENT_LAYERS + PLANE_LAYERS) * 16
+        + staged_bytes(width, height, MOMENT_LAYERS + PLANE_LAYERS)
+}
+
+/// Texels a staging row holds for a level `w` cells wide: copies take rows of 256 bytes.
+fn staged_row(w: u32) -> u32 {
+    w.next_multiple_of(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT / 16)
+}
+
+/// Bytes of a staging buffer of `layers` layers: level 1, the largest level staged.
+pub fn staged_bytes(width: u32, height: u32, layers: u32) -> u64 {
+    let (w, h) = level_size(width, height, 1);
+    u64::from(staged_row(w)) * u64::from(h.max(1)) * u64::from(layers) * 16
 }
 
 /// Bytes of the level uniforms: one slot per dispatch.
@@ -129,6 +150,7 @@ fn slots(width: u32, height: u32) -> Vec<(&'static str, Level)> {
         floor: DEMODULATION_FLOOR,
         depth_tolerance: DEPTH_TOLERANCE,
         material_tolerance: MATERIAL_TOLERANCE,
+        row: staged_row(level_size(width, height, l).0),
         ..Level::default()
     };
     let near = |s: &mut Level, l: u32| {
@@ -153,15 +175,16 @@ fn slots(width: u32, height: u32) -> Vec<(&'static str, Level)> {
 }
 
 /// Points the pyramid's ports at level `l`'s atlases: planes are read from the other parity
-/// and written to its own; moments likewise when pulling, read from its own when pushing.
+/// (the parents, pushing); moments from the other parity pulling (the children), from its own
+/// pushing.
 fn route(f: &mut Recorder, l: u32, pulling: bool) {
     let own = (l % 2) as usize;
     let other = 1 - own;
-    let (read, written) = if pulling { (other, own) } else { (own, other) };
-    f.route("pull_push.moments_in", MOMENTS[read]);
-    f.route("pull_push.moments_out", MOMENTS[written]);
+    f.route(
+        "pull_push.moments_in",
+        MOMENTS[if pulling { other } else { own }],
+    );
     f.route("pull_push.planes_in", PLANES[other]);
-    f.route("pull_push.planes_out", PLANES[own]);
 }
 
 /// Invocations a dispatch needs per axis: one per cell pulling, one per 2×2 block of cells
@@ -194,7 +217,64 @@ pub fn record(f: &mut Recorder) -> Result<(), GraphError> {
         d.offsets = vec![(i as u64 * SLOT) as u32];
         dispatches.push(d);
     }
-    f.compute(PASS.label, &dispatches);
+    // A pass per dispatch, each level copied into its atlas before the next reads it; timed
+    // as one.
+    let span = f.timer.span(PASS.label);
+    let last = dispatches.len().saturating_sub(1);
+    for (i, ((entry, s), d)) in slots.iter().zip(&dispatches).enumerate() {
+        {
+            let mut pass = f.encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                label: Some(PASS.label),
+                timestamp_writes: f.timer.part(span, i == 0, i == last),
+            });
+            crate::render::graph::run(&mut pass, d, f.size);
+        }
+        if s.level > 0 {
+            stage(f, entry.starts_with("pull"), s)?;
+        }
+    }
     f.route("frame.color", "resolve.color");
+    Ok(())
+}
+
+/// Copies the level a dispatch wrote from its staging buffer into its atlas.
+fn stage(f: &mut Recorder, pulling: bool, s: &Level) -> Result<(), GraphError> {
+    let own = (s.level % 2) as usize;
+    let (staged, atlas, layers) = if pulling {
+        (MOMENTS_STAGED, MOMENTS[own], MOMENT_LAYERS)
+    } else {
+        (PLANES_STAGED, PLANES[own], PLANE_LAYERS)
+    };
+    let missing = |name| GraphError::Missing {
+        pass: PASS.label,
+        name,
+    };
+    let buffer = f.resources.get_buffer(staged).ok_or(missing(staged))?;
+    let texture = f.resources.get_texture(atlas).ok_or(missing(atlas))?.0;
+    f.encoder.copy_buffer_to_texture(
+        wgpu::TexelCopyBufferInfo {
+            buffer,
+            layout: wgpu::TexelCopyBufferLayout {
+                offset: 0,
+                bytes_per_row: Some(s.row * 16),
+                rows_per_image: Some(s.size[1]),
+            },
+        },
+        wgpu::TexelCopyTextureInfo {
+            texture,
+            mip_level: 0,
+            origin: wgpu::Origin3d {
+                x: s.origin[0],
+                y: s.origin[1],
+                z: 0,
+            },
+            aspect: wgpu::TextureAspect::All,
+        },
+        wgpu::Extent3d {
+            width: s.size[0],
+            height: s.size[1],
+            depth_or_array_layers: layers,
+        },
+    );
     Ok(())
 }
