@@ -74,8 +74,7 @@ pub fn layers(binding: u32) -> wgpu::BindGroupLayoutEntry {
     }
 }
 
-/// A write-only storage texture for compute passes: `texture_storage_2d<F, write>` or, with
-/// `D2Array`, `texture_storage_2d_array<F, write>`.
+/// A write-only storage texture for compute passes: `texture_storage_2d<F, write>` (with `D2`).
 pub fn write_storage(
     binding: u32,
     format: wgpu::TextureFormat,
