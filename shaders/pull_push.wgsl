@@ -9,12 +9,13 @@
 @group(0) @binding(3) var albedo_tex: texture_2d<f32>;
 @group(0) @binding(5) var<storage, read_write> out_resolved: array<vec4<f32>>;
 @group(0) @binding(7) var normal_distance: texture_2d<f32>;
-// The pyramid is read from textures rather than storage buffers: a software adapter gathers a
-// texel per lane at once but loads from a buffer one lane at a time, and each cell here reads
-// several neighbours. Levels alternate between two atlases (odd and even levels); `_in` is
-// routed per dispatch. A dispatch writes its level to a staging buffer instead (a storage
-// texture's store costs there seven times a buffer's), copied into the atlas after it.
+// The pyramid is read from textures: a software adapter gathers a texel per lane at once but
+// loads buffer values one lane at a time. Levels alternate between two atlases (odd and even
+// levels); `_in` is routed per dispatch. A dispatch writes its level to staging buffers (a
+// storage texture's store costs there seven times a buffer's), copied into the atlas after
+// it; the moments in two buffers of three layers (lavapipe binds at most 128 MiB).
 @group(0) @binding(4) var<storage, read_write> moments_staged: array<vec4<f32>>;
+@group(0) @binding(11) var<storage, read_write> moments_staged_hi: array<vec4<f32>>;
 @group(0) @binding(8) var moments_in: texture_2d_array<f32>;
 @group(0) @binding(9) var planes_in: texture_2d_array<f32>;
 @group(0) @binding(10) var<storage, read_write> planes_staged: array<vec4<f32>>;
@@ -92,9 +93,9 @@ fn store_cell(c: vec2<u32>, v: Cell) {
     moments_staged[i] = vec4<f32>(v.c, v.w);
     moments_staged[i + n] = vec4<f32>(v.mean, v.s.x, v.s.y);
     moments_staged[i + 2u * n] = vec4<f32>(v.tx, v.s.z);
-    moments_staged[i + 3u * n] = vec4<f32>(v.ty, v.depth);
-    moments_staged[i + 4u * n] = vec4<f32>(v.lo, v.hi, v.material, v.depth_var);
-    moments_staged[i + 5u * n] = vec4<f32>(v.material_var, 0.0, 0.0, 0.0);
+    moments_staged_hi[i] = vec4<f32>(v.ty, v.depth);
+    moments_staged_hi[i + n] = vec4<f32>(v.lo, v.hi, v.material, v.depth_var);
+    moments_staged_hi[i + 2u * n] = vec4<f32>(v.material_var, 0.0, 0.0, 0.0);
 }
 
 // This level's cell `c` completed, to the staging buffer: value and material spread,

@@ -450,3 +450,16 @@ fn edges_at_the_mar_ask_for_sqrt_p_and_only_material_changes_count_when_demodula
         "edges at the MAR ask for fewer samples"
     );
 }
+
+/// The largest frame a session may ask for reconstructs: its pyramid's staging buffers stay
+/// within what the software adapter binds (128 MiB; six layers of moments at 3840×2160 in one
+/// buffer would be 199 MB).
+#[test]
+fn the_largest_frame_a_session_may_ask_for_reconstructs() {
+    let limits = fovea::protocol::Limits::default();
+    let (w, h) = (limits.max_width, limits.max_height);
+    let mut r = renderer();
+    let frame = r.render(&foveated("balanced", w, h, [0.5, 0.5]));
+    let frame = frame.unwrap_or_else(|e| panic!("{w}x{h} balanced: {e}"));
+    assert_eq!((frame.width, frame.height), (w, h));
+}

@@ -106,7 +106,14 @@ fn pyramid(device: &wgpu::Device, r: &mut Resources, width: u32, height: u32) {
         }
     }
     let staged = [
-        (pull_push::MOMENTS_STAGED, pull_push::MOMENT_LAYERS),
+        (
+            pull_push::MOMENTS_STAGED[0],
+            pull_push::STAGED_MOMENT_LAYERS,
+        ),
+        (
+            pull_push::MOMENTS_STAGED[1],
+            pull_push::STAGED_MOMENT_LAYERS,
+        ),
         (pull_push::PLANES_STAGED, pull_push::PLANE_LAYERS),
     ];
     for (name, layers) in staged {

@@ -30,9 +30,14 @@ pub const PLANE_LAYERS: u32 = 4;
 pub const MOMENTS: [&str; 2] = ["pull_push.moments[even]", "pull_push.moments[odd]"];
 pub const PLANES: [&str; 2] = ["pull_push.planes[even]", "pull_push.planes[odd]"];
 /// Where a dispatch writes its level before the copy into the atlas: layer by layer, row by
-/// row, `Level::row` texels a row.
-pub const MOMENTS_STAGED: &str = "pull_push.moments_staged";
+/// row, `Level::row` texels a row. The moments' six layers take two buffers of three, so that
+/// no buffer outgrows `shade.color` (16 bytes a pixel): a software adapter binds at most
+/// 128 MiB of storage, and six layers of level 1 at 3840×2160 are 199 MB.
+pub const MOMENTS_STAGED: [&str; 2] =
+    ["pull_push.moments_staged[0]", "pull_push.moments_staged[1]"];
 pub const PLANES_STAGED: &str = "pull_push.planes_staged";
+/// Layers in each moments staging buffer.
+pub const STAGED_MOMENT_LAYERS: u32 = MOMENT_LAYERS / 2;
 
 pub const PASS: PassDecl = PassDecl {
     label: "pull_push",
@@ -43,13 +48,14 @@ pub const PASS: PassDecl = PassDecl {
         read("shade.color"),
         read("sampling.flags"),
         texture("gbuffer.albedo"),
-        write(MOMENTS_STAGED),
+        write(MOMENTS_STAGED[0]),
         write("resolve.color"),
         dynamic_uniform("pull_push.levels", std::mem::size_of::<Level>() as u64),
         texture("gbuffer.normal_distance"),
         layers("pull_push.moments_in"),
         layers("pull_push.planes_in"),
         write(PLANES_STAGED),
+        write(MOMENTS_STAGED[1]),
     ],
     attachments: &[],
     entry_points: &["pull_pixels", "pull", "push", "push_pixels"],
@@ -237,14 +243,28 @@ pub fn record(f: &mut Recorder) -> Result<(), GraphError> {
     Ok(())
 }
 
-/// Copies the level a dispatch wrote from its staging buffer into its atlas.
+/// Copies the level a dispatch wrote from its staging buffers into its atlas.
 fn stage(f: &mut Recorder, pulling: bool, s: &Level) -> Result<(), GraphError> {
     let own = (s.level % 2) as usize;
-    let (staged, atlas, layers) = if pulling {
-        (MOMENTS_STAGED, MOMENTS[own], MOMENT_LAYERS)
-    } else {
-        (PLANES_STAGED, PLANES[own], PLANE_LAYERS)
-    };
+    if pulling {
+        for (i, staged) in MOMENTS_STAGED.into_iter().enumerate() {
+            let first = i as u32 * STAGED_MOMENT_LAYERS;
+            copy(f, staged, MOMENTS[own], first, STAGED_MOMENT_LAYERS, s)?;
+        }
+        return Ok(());
+    }
+    copy(f, PLANES_STAGED, PLANES[own], 0, PLANE_LAYERS, s)
+}
+
+/// Copies `layers` layers of level `s` from `staged` into `atlas`, from layer `first` on.
+fn copy(
+    f: &mut Recorder,
+    staged: &'static str,
+    atlas: &'static str,
+    first: u32,
+    layers: u32,
+    s: &Level,
+) -> Result<(), GraphError> {
     let missing = |name| GraphError::Missing {
         pass: PASS.label,
         name,
@@ -266,7 +286,7 @@ fn stage(f: &mut Recorder, pulling: bool, s: &Level) -> Result<(), GraphError> {
             origin: wgpu::Origin3d {
                 x: s.origin[0],
                 y: s.origin[1],
-                z: 0,
+                z: first,
             },
             aspect: wgpu::TextureAspect::All,
         },
