@@ -53,6 +53,23 @@ fn mode_bits(s: &crate::settings::RenderSettings) -> u32 {
     mode
 }
 
+/// The MODE_* bits that follow from the stream's targets and history rather than the settings
+/// alone: the coarse gather (planned per frame size), the still camera, and the kept saliency
+/// (still camera and the last frame's settings: the G-buffer is the last frame's).
+fn history_bits(s: &crate::settings::RenderSettings, t: &FrameTargets, still: bool) -> u32 {
+    let mut mode = 0;
+    if super::frame::coarse_gather(s, t.needs_dipole) {
+        mode |= MODE_COARSE_GATHER;
+    }
+    if still {
+        mode |= MODE_STILL_CAMERA;
+        if s.foveation.saliency && t.prev_settings.as_ref() == Some(s) {
+            mode |= MODE_SALIENCY_CACHED;
+        }
+    }
+    mode
+}
+
 pub(super) fn frame_uniform(
     scene: &Scene,
     camera: &Camera,
@@ -73,18 +90,7 @@ pub(super) fn frame_uniform(
     let s = &req.settings;
     let fov = &s.foveation;
     let still = history && prev_view_proj == view_proj && prev_eye == eye;
-    let mode = mode_bits(s)
-        | if super::frame::coarse_gather(s, t.needs_dipole) {
-            MODE_COARSE_GATHER
-        } else {
-            0
-        }
-        | if still { MODE_STILL_CAMERA } else { 0 }
-        | if still && fov.saliency && t.prev_settings.as_ref() == Some(s) {
-            MODE_SALIENCY_CACHED
-        } else {
-            0
-        };
+    let mode = mode_bits(s) | history_bits(s, t, still);
     let viewing = Viewing::new(req.display, w, h);
     let gaze_px = viewing.to_pixels(req.gaze.map(f64::from));
     let w_min = viewing.pixel_angle_deg();
