@@ -161,10 +161,18 @@ fn self_test(renderer: &mut Renderer) -> Result<()> {
     renderer.release_stream(probe.stream);
     match result {
         Ok(_) => Ok(()),
-        Err(e) => anyhow::bail!(
-            "the GPU adapter {} cannot run Fovea's passes ({e}). {DRIVER_HINT}",
-            renderer.adapter()
-        ),
+        Err(e) => {
+            // wgpu's validation errors span lines; the refusal stays one line.
+            let why = e
+                .to_string()
+                .split_whitespace()
+                .collect::<Vec<_>>()
+                .join(" ");
+            anyhow::bail!(
+                "the GPU adapter {} cannot run Fovea's passes ({why}). {DRIVER_HINT}",
+                renderer.adapter()
+            )
+        }
     }
 }
 
