@@ -105,18 +105,7 @@ fn pyramid(device: &wgpu::Device, r: &mut Resources, width: u32, height: u32) {
             r.texture_array(name, texture);
         }
     }
-    let staged = [
-        (
-            pull_push::MOMENTS_STAGED[0],
-            pull_push::STAGED_MOMENT_LAYERS,
-        ),
-        (
-            pull_push::MOMENTS_STAGED[1],
-            pull_push::STAGED_MOMENT_LAYERS,
-        ),
-        (pull_push::PLANES_STAGED, pull_push::PLANE_LAYERS),
-    ];
-    for (name, layers) in staged {
+    for (name, layers) in pull_push::STAGED {
         let bytes = pull_push::staged_bytes(width, height, layers);
         let staging = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some(name),

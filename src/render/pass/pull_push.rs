@@ -37,7 +37,13 @@ pub const MOMENTS_STAGED: [&str; 2] =
     ["pull_push.moments_staged[0]", "pull_push.moments_staged[1]"];
 pub const PLANES_STAGED: &str = "pull_push.planes_staged";
 /// Layers in each moments staging buffer.
-pub const STAGED_MOMENT_LAYERS: u32 = MOMENT_LAYERS / 2;
+const STAGED_MOMENT_LAYERS: u32 = MOMENT_LAYERS / 2;
+/// Every staging buffer with its layers, as the targets create them.
+pub const STAGED: [(&str, u32); 3] = [
+    (MOMENTS_STAGED[0], STAGED_MOMENT_LAYERS),
+    (MOMENTS_STAGED[1], STAGED_MOMENT_LAYERS),
+    (PLANES_STAGED, PLANE_LAYERS),
+];
 
 pub const PASS: PassDecl = PassDecl {
     label: "pull_push",
@@ -121,7 +127,10 @@ pub fn pyramid_bytes(width: u32, height: u32) -> u64 {
         u64::from(w) * u64::from(h)
     };
     (texels(false) + texels(true)) * u64::from(MOMENT_LAYERS + PLANE_LAYERS) * 16
-        + staged_bytes(width, height, MOMENT_LAYERS + PLANE_LAYERS)
+        + STAGED
+            .iter()
+            .map(|&(_, layers)| staged_bytes(width, height, layers))
+            .sum::<u64>()
 }
 
 /// Texels a staging row holds for a level `w` cells wide: copies take rows of 256 bytes.
