@@ -51,8 +51,16 @@ pub fn level_at(e_deg: f64, pixel_deg: f64, p: &LowPass) -> f32 {
     ((w / pixel_deg).log2().max(0.0) as f32).min(MAX_LEVEL as f32)
 }
 
-/// The level of every pixel, `gaze` normalised.
-pub fn level_map(
+/// Size of the level grid: a corner every `CELL` pixels, covering the frame.
+pub fn grid_size(width: u32, height: u32) -> [u32; 2] {
+    [width.div_ceil(CELL) + 1, height.div_ceil(CELL) + 1]
+}
+
+/// The exact levels at the grid's corners (row-major, [`grid_size`]), each pixel's level being
+/// the bilinear blend of its cell's four. The guard is widened by 1.5 cell diagonals here, so
+/// a pixel within the guard has all four corners at level 0. The GPU pass (`low_pass`) reads
+/// this very grid, so both filters agree on every level.
+pub fn level_grid(
     width: u32,
     height: u32,
     gaze: [f64; 2],
@@ -61,14 +69,13 @@ pub fn level_map(
 ) -> Vec<f32> {
     let pixel_deg = viewing.pixel_angle_deg();
     let gaze_px = viewing.to_pixels(gaze);
-    let (gw, gh) = (width.div_ceil(CELL) + 1, height.div_ceil(CELL) + 1);
-    // Widened guard on the grid: a pixel in the guard has all four grid corners in this one.
+    let [gw, gh] = grid_size(width, height);
     let cell_deg = f64::from(CELL) * std::f64::consts::SQRT_2 * pixel_deg * 1.5;
     let grid_params = LowPass {
         guard_deg: p.guard_deg + cell_deg,
         ..*p
     };
-    let grid: Vec<f32> = (0..gh)
+    (0..gh)
         .flat_map(|j| (0..gw).map(move |i| (i, j)))
         .map(|(i, j)| {
             let at = [f64::from(i * CELL), f64::from(j * CELL)];
@@ -78,7 +85,19 @@ pub fn level_map(
                 &grid_params,
             )
         })
-        .collect();
+        .collect()
+}
+
+/// The level of every pixel, `gaze` normalised.
+pub fn level_map(
+    width: u32,
+    height: u32,
+    gaze: [f64; 2],
+    viewing: &Viewing,
+    p: &LowPass,
+) -> Vec<f32> {
+    let grid = level_grid(width, height, gaze, viewing, p);
+    let gw = grid_size(width, height)[0];
     // Row by row, cell by cell: the four corners are read once per cell row, not per pixel.
     let mut out = vec![0.0f32; (width * height) as usize];
     for (y, row) in (0..height).zip(out.chunks_exact_mut(width as usize)) {

@@ -10,8 +10,8 @@
 use super::graph::{GraphError, PassDecl, Recorder};
 use super::pass::gbuffer::MeshBuffers;
 use super::pass::{
-    compact, dof, gbuffer, i420, jfa, output, photons, pull_push, pyramid, resolve, sampling,
-    screen_diffusion, shade, shadow,
+    compact, dof, gbuffer, i420, jfa, low_pass, output, photons, pull_push, pyramid, resolve,
+    sampling, screen_diffusion, shade, shadow,
 };
 use super::request::MIN_XI;
 use crate::foveation::reconstruct::frame_jfa_steps;
@@ -19,7 +19,7 @@ use crate::settings::{Reconstruction, RenderSettings, Rung};
 
 /// Every pass the renderer has, in the order a frame meets them (shadow, photons and pyramid run
 /// once per static scene, before the frame that first needs them).
-pub const PASSES: [&PassDecl; 14] = [
+pub const PASSES: [&PassDecl; 15] = [
     &shadow::PASS,
     &photons::PASS,
     &pyramid::PASS,
@@ -33,6 +33,7 @@ pub const PASSES: [&PassDecl; 14] = [
     &pull_push::PASS,
     &dof::PASS,
     &output::PASS,
+    &low_pass::PASS,
     &i420::PASS,
 ];
 
@@ -49,6 +50,9 @@ pub struct FramePlan {
     pub pull_push: bool,
     /// Jump sizes of the JFA steps (foveated frames reconstructed from JFA).
     pub jfa_steps: Vec<u32>,
+    /// Foveated encoding's low-pass of the output image, before the readback (and before
+    /// `i420`, which converts the filtered image).
+    pub low_pass: Option<low_pass::Filter>,
     /// Convert the output to I420 planes for the readback (H.264 sessions, even sizes).
     pub i420: bool,
     /// Gather the photons on the coarse lattice before shading a whole frame on a photon rung.
@@ -69,6 +73,7 @@ impl FramePlan {
             } else {
                 Vec::new()
             },
+            low_pass: None,
             i420: false,
             coarse_gather: coarse_gather(s, needs_dipole),
         }
@@ -125,12 +130,16 @@ pub fn record_prefix(
     Ok(())
 }
 
-/// What comes after shading: depth of field, the output image, and the next frame's history.
+/// What comes after shading: depth of field, the output image (low-passed and converted to
+/// I420 when asked), and the next frame's history.
 pub fn record_suffix(f: &mut Recorder, plan: &FramePlan) -> Result<(), GraphError> {
     if plan.dof {
         dof::record(f)?;
     }
     output::record(f)?;
+    if let Some(filter) = &plan.low_pass {
+        low_pass::record(f, filter)?;
+    }
     if plan.i420 {
         i420::record(f)?;
     }

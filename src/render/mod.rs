@@ -41,7 +41,8 @@ pub use device::Gpu;
 pub use inspect::PullPushInputs;
 pub use renderer::Renderer;
 pub use request::{
-    FrameRequest, Inspection, Readback, RenderedFrame, DEFAULT_PUPIL_MM, MAX_SIDE, MIN_XI,
+    FrameRequest, GpuLowPass, Inspection, Readback, RenderedFrame, DEFAULT_PUPIL_MM, MAX_SIDE,
+    MIN_XI,
 };
 pub use scheduler::SLICE_MS;
 pub use sliced::{bands, FrameInFlight, Progress};

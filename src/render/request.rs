@@ -3,6 +3,7 @@
 
 use glam::Vec3;
 
+use crate::encode::foveated::LowPass;
 use crate::foveation::rank_map;
 use crate::radiosity::Progress;
 use crate::scene::Camera;
@@ -39,6 +40,8 @@ pub struct FrameRequest {
     pub time_s: f64,
     /// How the frame comes back to host memory.
     pub readback: Readback,
+    /// Foveated encoding's low-pass, done before the readback where the renderer may.
+    pub low_pass: GpuLowPass,
 }
 
 /// The image a frame is read back as.
@@ -53,6 +56,21 @@ pub enum Readback {
     I420Preferred,
     /// I420 planes at even sizes whatever the adapter (tests of the pass).
     I420,
+}
+
+/// Whether the renderer low-passes the periphery for foveated encoding
+/// (`encode::foveated`) before the frame is read back.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub enum GpuLowPass {
+    /// No: the encoder does it if the session asked.
+    #[default]
+    Off,
+    /// Where the adapter is a GPU, or where the frame is read back as I420 (which the CPU
+    /// filter cannot take). On a CPU adapter the pass shares the render thread's cores, where
+    /// the encoder thread runs beside it.
+    Preferred(LowPass),
+    /// Whatever the adapter (tests of the pass).
+    Always(LowPass),
 }
 
 impl FrameRequest {
@@ -79,6 +97,7 @@ impl FrameRequest {
             stream: 0,
             time_s: 0.0,
             readback: Readback::Rgba,
+            low_pass: GpuLowPass::Off,
         }
     }
 }
@@ -92,6 +111,8 @@ pub struct RenderedFrame {
     pub rgba: Vec<u8>,
     /// The frame as I420 planes (Y, U, V, tight), when the request asked for them.
     pub i420: Option<Vec<u8>>,
+    /// The renderer low-passed the periphery (the request's `low_pass`), so the encoder must not.
+    pub low_passed: bool,
     /// Fraction of the frame's pixels the shading pass ran for.
     pub sampled: f64,
     pub render_ms: f64,

@@ -19,7 +19,7 @@ use super::graph::Recorder;
 use super::pass::photons::PhotonInputs;
 use super::pass::shade;
 use super::renderer::{not_loaded, Renderer, TargetKey};
-use super::request::{FrameRequest, Readback, RenderedFrame, MAX_SIDE};
+use super::request::{FrameRequest, GpuLowPass, Readback, RenderedFrame, MAX_SIDE};
 use super::uniforms::FrameUniform;
 use super::RenderError;
 
@@ -194,7 +194,7 @@ impl Renderer {
         part: Part,
         photon_encoder: Option<wgpu::CommandBuffer>,
     ) -> Result<wgpu::SubmissionIndex, RenderError> {
-        let i420 = self.wants_i420(req);
+        let (i420, low_pass) = (self.wants_i420(req), self.gpu_low_pass(req));
         // Field by field: the targets, pipelines and timer are borrowed mutably below.
         let sg = self
             .scenes
@@ -214,6 +214,7 @@ impl Renderer {
         }
         let mut plan = FramePlan::of(&req.settings, req.width, req.height, t.needs_dipole);
         plan.i420 = i420;
+        plan.low_pass = low_pass;
         let scope = device.push_error_scope(wgpu::ErrorFilter::Validation);
         let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
             label: Some("frame"),
@@ -275,6 +276,22 @@ impl Renderer {
         }
     }
 
+    /// The low-pass the renderer does for this frame (see `GpuLowPass`).
+    fn gpu_low_pass(&self, req: &FrameRequest) -> Option<super::pass::low_pass::Filter> {
+        let gpu = self.gpu.info.device_type != wgpu::DeviceType::Cpu;
+        let low_pass = match req.low_pass {
+            GpuLowPass::Off => return None,
+            GpuLowPass::Preferred(p) if gpu || self.wants_i420(req) => p,
+            GpuLowPass::Preferred(_) => return None,
+            GpuLowPass::Always(p) => p,
+        };
+        Some(super::pass::low_pass::Filter {
+            low_pass,
+            viewing: crate::viewing::Viewing::new(req.display, req.width, req.height),
+            gaze: req.gaze.map(f64::from),
+        })
+    }
+
     fn finish(&mut self, f: &mut FrameInFlight, ti: usize) -> Result<RenderedFrame, RenderError> {
         let (w, h) = (f.req.width, f.req.height);
         let started = Instant::now();
@@ -297,6 +314,7 @@ impl Renderer {
             height: h,
             rgba,
             i420,
+            low_passed: self.gpu_low_pass(&f.req).is_some(),
             sampled,
             render_ms: f.render_ms,
             readback_ms,

@@ -6,7 +6,7 @@
 use std::collections::HashMap;
 
 use super::graph::{BindKey, Resources, Routes};
-use super::pass::{gbuffer, i420, jfa, pull_push, shade};
+use super::pass::{gbuffer, i420, jfa, low_pass, pull_push, shade};
 use super::uniforms::FrameUniform;
 use super::RenderError;
 use crate::foveation::reconstruct::jfa_steps;
@@ -75,6 +75,51 @@ fn textures() -> [(&'static str, wgpu::TextureFormat, wgpu::TextureUsages); 8] {
         ),
         (jfa::PING, wgpu::TextureFormat::R32Uint, seeds),
         (jfa::PONG, wgpu::TextureFormat::R32Uint, seeds),
+    ]
+}
+
+/// The buffers sized by the frame (or by nothing): (name, bytes, usage).
+fn sized_buffers(width: u32, height: u32) -> [(&'static str, u64, wgpu::BufferUsages); 8] {
+    let uniform = B::UNIFORM | B::COPY_DST;
+    [
+        // `[count, workgroups x, y, z]` for the indirect shading dispatch.
+        (
+            "compact.counter",
+            16,
+            B::STORAGE | B::INDIRECT | B::COPY_SRC | B::COPY_DST,
+        ),
+        (
+            "frame.uniform",
+            std::mem::size_of::<FrameUniform>() as u64,
+            uniform,
+        ),
+        // Room for the longest step list; each frame writes the steps it runs.
+        (
+            "jfa.steps",
+            jfa::SLOT * jfa_steps(width, height).len() as u64,
+            uniform,
+        ),
+        (
+            "pull_push.levels",
+            pull_push::levels_bytes(width, height),
+            uniform,
+        ),
+        (
+            "shade.coarse",
+            shade::coarse_bytes(width, height),
+            B::STORAGE,
+        ),
+        ("low_pass.params", low_pass::params_bytes(), uniform),
+        (
+            "low_pass.grid",
+            low_pass::grid_bytes(width, height),
+            B::STORAGE | B::COPY_DST,
+        ),
+        (
+            "low_pass.pyramid",
+            low_pass::pyramid_bytes(width, height),
+            B::STORAGE,
+        ),
     ]
 }
 
@@ -147,38 +192,10 @@ impl FrameTargets {
             let usage = B::STORAGE | B::COPY_SRC | B::COPY_DST;
             r.buffer(name, buffer(name, pixels * bytes, usage));
         }
-        // `[count, workgroups x, y, z]` for the indirect shading dispatch.
-        let counter_usage = B::STORAGE | B::INDIRECT | B::COPY_SRC | B::COPY_DST;
-        r.buffer(
-            "compact.counter",
-            buffer("compact.counter", 16, counter_usage),
-        );
-        let uniform_size = std::mem::size_of::<FrameUniform>() as u64;
-        r.buffer(
-            "frame.uniform",
-            buffer("frame.uniform", uniform_size, B::UNIFORM | B::COPY_DST),
-        );
-        // Room for the longest step list; each frame writes the steps it runs.
-        let steps = jfa::SLOT * jfa_steps(width, height).len() as u64;
-        r.buffer(
-            "jfa.steps",
-            buffer("jfa.steps", steps, B::UNIFORM | B::COPY_DST),
-        );
-        pyramid(device, &mut r, width, height);
-        for (name, bytes, usage) in [
-            (
-                "pull_push.levels",
-                pull_push::levels_bytes(width, height),
-                B::UNIFORM | B::COPY_DST,
-            ),
-            (
-                "shade.coarse",
-                shade::coarse_bytes(width, height),
-                B::STORAGE,
-            ),
-        ] {
+        for (name, bytes, usage) in sized_buffers(width, height) {
             r.buffer(name, buffer(name, bytes, usage));
         }
+        pyramid(device, &mut r, width, height);
         let i420_bytes = i420::words(width, height).max(1) * 4;
         r.buffer(
             "output.i420",
@@ -217,6 +234,7 @@ impl FrameTargets {
         u64::from(width) * u64::from(height) * per_pixel
             + pull_push::pyramid_bytes(width, height)
             + shade::coarse_bytes(width, height)
+            + low_pass::pyramid_bytes(width, height)
             + 2 * 4 * i420::words(width, height)
     }
 

@@ -15,7 +15,7 @@ use crate::protocol::{
     encode_frame, Codec, ErrorCode, FrameHeader, GazeUsed, InsetHeader, ProtocolError,
     SolveProgress,
 };
-use crate::render::{FrameRequest, RenderHandle};
+use crate::render::{FrameRequest, GpuLowPass, RenderHandle};
 use crate::viewing::Viewing;
 
 /// Everything needed to render a frame and write its header.
@@ -45,10 +45,13 @@ impl FrameJob {
         h264: Option<Arc<Mutex<H264Stream>>>,
     ) -> FrameJob {
         let viewing = || Viewing::new(hello.display, hello.width, hello.height);
-        // H.264 takes I420: the GPU converts where that is faster, unless the CPU low-pass
-        // or the inset's packing needs RGB first.
-        if hello.codec == Codec::H264 && !hello.foveated_encoding && hello.inset_deg.is_none() {
+        // H.264 takes I420: the GPU converts where that is faster, unless the inset's packing
+        // needs RGB first. The low-pass runs on the GPU wherever the conversion does.
+        if hello.codec == Codec::H264 && hello.inset_deg.is_none() {
             request.readback = crate::render::Readback::I420Preferred;
+        }
+        if hello.foveated_encoding {
+            request.low_pass = GpuLowPass::Preferred(LowPass::default());
         }
         FrameJob {
             ticket,
@@ -103,7 +106,9 @@ pub async fn make(render: RenderHandle, job: FrameJob) -> Result<MadeFrame, Fram
     );
     let (codec, quality, w, h) = (job.codec, job.quality, frame.width, frame.height);
     let stream = job.h264.clone();
-    let (low_pass, inset, gaze) = (job.low_pass, job.inset, job.request.gaze);
+    // Unless the renderer filtered the frame already.
+    let low_pass = job.low_pass.filter(|_| !frame.low_passed);
+    let (inset, gaze) = (job.inset, job.request.gaze);
     let (rgba, i420) = (frame.rgba, frame.i420);
     let encoded = tokio::task::spawn_blocking(move || {
         let _span = tracing::debug_span!("encode", frame = frame_no).entered();
@@ -121,7 +126,7 @@ pub async fn make(render: RenderHandle, job: FrameJob) -> Result<MadeFrame, Fram
                     (_, Some((deg, viewing))) => {
                         encode_packed(&mut s, &rgba, w, h, g, &viewing, deg)
                     }
-                    // Converted on the GPU (no low-pass: that needs RGB).
+                    // Converted (and low-passed, if asked) on the GPU.
                     (Some(planes), None) => s.encode_i420(planes, w, h).map(|f| (f, None)),
                     (None, None) => s.encode(&rgba, w, h).map(|f| (f, None)),
                 })

@@ -7,6 +7,7 @@ pub mod dof;
 pub mod gbuffer;
 pub mod i420;
 pub mod jfa;
+pub mod low_pass;
 pub mod output;
 pub mod photons;
 pub mod pull_push;
