@@ -26,7 +26,7 @@ pub struct BenchArgs {
     #[arg(long)]
     pub moving: bool,
     /// Configurations: presets, rungs, knobs, or a comma-separated list of names from knobs.
-    /// `codecs` compares the encoders instead (JPEG q50–95, H.264 250–8000 kbit/s, each plain,
+    /// `codecs` compares the encoders instead (JPEG q50–95, H.264 125–8000 kbit/s, each plain,
     /// low-passed and with 20° and 16° insets, JPEG with a 13.3° one) on frames rendered along
     /// --gaze-file (and --orbit-deg-per-s): one scene,
     /// one size, --frames frames at 60 fps; writes codecs.json, codecs.md, codecs.svg.
