@@ -92,6 +92,7 @@ fn the_codec_sweep_measures_every_configuration_on_the_same_frames() {
             "H.264 + inset 20°",
             "JPEG + inset 16°",
             "H.264 + inset 16°",
+            "H.264 + inset 16° + low-pass",
             "JPEG + inset 13.3°"
         ]
     );

@@ -119,7 +119,7 @@ mod tests {
                 .collect()
         };
         let inset = names("INSET 16");
-        assert_eq!(inset.len(), 10, "{inset:?}");
+        assert_eq!(inset.len(), 19, "{inset:?}");
         assert_eq!(inset[0], fovea::bench::TARGET);
         assert!(
             inset[1..].iter().all(|n| n.contains("inset 16°")),
@@ -137,6 +137,7 @@ mod tests {
                 "H.264 500 kbit/s + inset 20°",
                 "JPEG q95 + inset 16°",
                 "H.264 500 kbit/s + inset 16°",
+                "H.264 500 kbit/s + inset 16° + low-pass",
                 "JPEG q95 + inset 13.3°"
             ]
         );
