@@ -268,7 +268,7 @@ impl Renderer {
     /// Whether a frame is converted to I420 on the GPU and read back so (see `Readback`).
     fn wants_i420(&self, req: &FrameRequest) -> bool {
         let even = req.width % 2 == 0 && req.height % 2 == 0;
-        let gpu = self.gpu.info.device_type != wgpu::DeviceType::Cpu;
+        let gpu = !self.is_software();
         even && match req.readback {
             Readback::Rgba => false,
             Readback::I420Preferred => gpu,
@@ -278,10 +278,9 @@ impl Renderer {
 
     /// The low-pass the renderer does for this frame (see `GpuLowPass`).
     fn gpu_low_pass(&self, req: &FrameRequest) -> Option<super::pass::low_pass::Filter> {
-        let gpu = self.gpu.info.device_type != wgpu::DeviceType::Cpu;
         let low_pass = match req.low_pass {
             GpuLowPass::Off => return None,
-            GpuLowPass::Preferred(p) if gpu || self.wants_i420(req) => p,
+            GpuLowPass::Preferred(p) if !self.is_software() || self.wants_i420(req) => p,
             GpuLowPass::Preferred(_) => return None,
             GpuLowPass::Always(p) => p,
         };
