@@ -41,10 +41,9 @@ impl BenchConfig {
 }
 
 /// `presets`: the named presets. `rungs`: every translucency rung and cut, unfoveated.
-/// `knobs`: presets, rungs, shadows and specular off (of `full` and `balanced`), and
-/// single-knob variations of `balanced` (MAR slope, ξ,
-/// probability form, saliency, reprojection, reconstruction, noise, compaction) and the
-/// encoder. Any other value is a comma-separated list of names from `knobs`.
+/// `knobs`: presets, rungs, shadows and specular off and depth of field on (of `full` and
+/// `balanced`), and single-knob variations of `balanced` (MAR slope, ξ, probability form,
+/// saliency, reprojection, reconstruction, noise, compaction) and the encoder. Any other value is a comma-separated list of names from `knobs`.
 pub fn sweep(which: &str) -> Result<Vec<BenchConfig>, String> {
     let presets: Vec<BenchConfig> = Preset::ALL
         .iter()
@@ -83,8 +82,14 @@ pub fn sweep(which: &str) -> Result<Vec<BenchConfig>, String> {
     ));
     let mut knobs = presets.clone();
     knobs.extend(rungs.iter().cloned());
-    // What the surface model costs: the key light's shadows and the specular lobe, each off.
+    // What the surface model costs: the key light's shadows and the specular lobe, each off;
+    // and what the depth of field's gather adds, on.
     for preset in ["full", "balanced"] {
+        knobs.push(BenchConfig::variant_of(
+            preset,
+            format!("{preset} dof"),
+            |s| s.dof = true,
+        ));
         knobs.push(BenchConfig::variant_of(
             preset,
             format!("{preset} no-shadows"),

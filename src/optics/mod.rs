@@ -5,6 +5,7 @@ pub mod acuity;
 pub mod coarse_gather;
 pub mod color;
 pub mod dipole;
+pub mod dof;
 pub mod lights;
 pub mod saliency;
 pub mod shading;
