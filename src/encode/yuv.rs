@@ -71,7 +71,8 @@ impl openh264::formats::YUVSource for I420 {
 /// 720p frame, more than openh264's own P-frame encode (2–3 ms). The coefficients carry 24
 /// fractional bits (chroma's 22, applied to sums of four), so a result differs from exact
 /// arithmetic only where the exact value lies within ~1e-5 of a rounding boundary, as f32
-/// arithmetic (the GPU pass's) does; `tests` bound it against an f64 reference.
+/// arithmetic (the GPU pass's) does; `tests` bound it against an f64 reference. On a CPU
+/// with AVX2 the same arithmetic is compiled for it: 1.1 → 0.8 ms a 720p frame here.
 pub fn rgba_to_i420(
     rgba: &[u8],
     width: usize,
@@ -80,11 +81,53 @@ pub fn rgba_to_i420(
     u: &mut [u8],
     v: &mut [u8],
 ) {
-    const ONE: i64 = 1 << 24;
+    #[cfg(target_arch = "x86_64")]
+    if std::arch::is_x86_feature_detected!("avx2") {
+        // SAFETY: the CPU has AVX2, checked just above; the function is otherwise safe.
+        unsafe { rgba_to_i420_avx2(rgba, width, height, y, u, v) };
+        return;
+    }
+    convert(rgba, width, height, y, u, v, false);
+}
+
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+fn rgba_to_i420_avx2(
+    rgba: &[u8],
+    width: usize,
+    height: usize,
+    y: &mut [u8],
+    u: &mut [u8],
+    v: &mut [u8],
+) {
+    convert(rgba, width, height, y, u, v, true);
+}
+
+/// [`rgba_to_i420`]'s body, inlined into each caller so it is compiled for its CPU features.
+/// With `luma_by_rows` luma runs as a plain loop over each row, which AVX2 vectorises (8
+/// pixels a step; 0.9 → 0.3 ms a 720p frame); without AVX2 that loop is slower than luma
+/// computed inside the chroma's 2×2 blocks (1.4 against 1.1 ms for the whole conversion).
+#[inline(always)]
+fn convert(
+    rgba: &[u8],
+    width: usize,
+    height: usize,
+    y: &mut [u8],
+    u: &mut [u8],
+    v: &mut [u8],
+    luma_by_rows: bool,
+) {
+    // u32 holds 255 · 2^24 + 2^23.
     let luma = |p: &[u8]| {
-        let (r, g, b) = (i64::from(p[0]), i64::from(p[1]), i64::from(p[2]));
-        ((5_016_388 * r + 9_848_226 * g + 1_912_603 * b + ONE / 2) >> 24) as u8
+        let (r, g, b) = (u32::from(p[0]), u32::from(p[1]), u32::from(p[2]));
+        ((5_016_388 * r + 9_848_226 * g + 1_912_603 * b + (1 << 23)) >> 24) as u8
     };
+    let luma_row = |row: &[u8], out: &mut [u8]| {
+        for (o, p) in out.iter_mut().zip(row.chunks_exact(4)) {
+            *o = luma(p);
+        }
+    };
+    const ONE: i64 = 1 << 24;
     let chroma = |x: i64| ((128 * ONE + x + ONE / 2) >> 24).clamp(0, 255) as u8;
     let hw = width / 2;
     let mut rows = rgba.chunks_exact(4 * width);
@@ -94,6 +137,10 @@ pub fn rgba_to_i420(
         };
         let y_rows = &mut y[2 * by * width..(2 * by + 2) * width];
         let (y_top, y_bottom) = y_rows.split_at_mut(width);
+        if luma_by_rows {
+            luma_row(top, y_top);
+            luma_row(bottom, y_bottom);
+        }
         let u_row = &mut u[by * hw..(by + 1) * hw];
         let v_row = &mut v[by * hw..(by + 1) * hw];
         let blocks = top
@@ -102,10 +149,12 @@ pub fn rgba_to_i420(
             .zip(y_top.chunks_exact_mut(2).zip(y_bottom.chunks_exact_mut(2)))
             .zip(u_row.iter_mut().zip(v_row.iter_mut()));
         for (((t, b), (yt, yb)), (cu, cv)) in blocks {
-            yt[0] = luma(&t[0..3]);
-            yt[1] = luma(&t[4..7]);
-            yb[0] = luma(&b[0..3]);
-            yb[1] = luma(&b[4..7]);
+            if !luma_by_rows {
+                yt[0] = luma(&t[0..4]);
+                yt[1] = luma(&t[4..8]);
+                yb[0] = luma(&b[0..4]);
+                yb[1] = luma(&b[4..8]);
+            }
             let sum = |c: usize| {
                 i64::from(t[c]) + i64::from(t[c + 4]) + i64::from(b[c]) + i64::from(b[c + 4])
             };
@@ -208,7 +257,7 @@ fn to_rgba(
 mod tests {
     use super::*;
 
-    fn convert(rgba: &[u8], w: usize, h: usize) -> (Vec<u8>, Vec<u8>, Vec<u8>) {
+    fn planes_of(rgba: &[u8], w: usize, h: usize) -> (Vec<u8>, Vec<u8>, Vec<u8>) {
         let (mut y, mut u, mut v) = (vec![0; w * h], vec![0; w * h / 4], vec![0; w * h / 4]);
         rgba_to_i420(rgba, w, h, &mut y, &mut u, &mut v);
         (y, u, v)
@@ -217,13 +266,13 @@ mod tests {
     #[test]
     fn black_white_and_grey_land_on_the_standards_codes() {
         for (grey, luma) in [(0u8, 0u8), (255, 255), (128, 128)] {
-            let (y, u, v) = convert(&[grey, grey, grey, 255].repeat(4), 2, 2);
+            let (y, u, v) = planes_of(&[grey, grey, grey, 255].repeat(4), 2, 2);
             assert_eq!((y[0], u[0], v[0]), (luma, 128, 128), "grey {grey}");
         }
         // Saturated primaries reach the chroma extremes without wrapping.
-        let (_, u, v) = convert(&[0, 0, 255, 255].repeat(4), 2, 2);
+        let (_, u, v) = planes_of(&[0, 0, 255, 255].repeat(4), 2, 2);
         assert_eq!(u[0], 255);
-        let (_, _, v_red) = convert(&[255, 0, 0, 255].repeat(4), 2, 2);
+        let (_, _, v_red) = planes_of(&[255, 0, 0, 255].repeat(4), 2, 2);
         assert_eq!((v[0] < 128, v_red[0]), (true, 255));
     }
 
@@ -262,7 +311,7 @@ mod tests {
         // Every byte value in every channel, scrambled over a 256×256 picture.
         let (w, h) = (256, 256);
         let rgba = crate::encode::noise_rgba(w * h, 0x2545_f491);
-        let (got, want) = (convert(&rgba, w, h), exact(&rgba, w, h));
+        let (got, want) = (planes_of(&rgba, w, h), exact(&rgba, w, h));
         let (mut off, mut n) = (0usize, 0usize);
         for (a, b) in [(&got.0, &want.0), (&got.1, &want.1), (&got.2, &want.2)] {
             for (x, e) in a.iter().zip(b.iter()) {
@@ -277,13 +326,28 @@ mod tests {
     }
 
     #[test]
+    fn both_loop_orders_give_the_same_bytes() {
+        // Odd-sized in blocks, every byte value: luma by rows (the AVX2 build) and luma inside
+        // the 2×2 blocks (any other CPU) are the same arithmetic.
+        let (w, h) = (198, 66);
+        let rgba = crate::encode::noise_rgba(w * h, 0x9e37_79b9);
+        let planes = |by_rows| {
+            let (mut y, mut u, mut v) = (vec![0; w * h], vec![0; w * h / 4], vec![0; w * h / 4]);
+            convert(&rgba, w, h, &mut y, &mut u, &mut v, by_rows);
+            (y, u, v)
+        };
+        assert!(planes(true) == planes(false));
+        assert!(planes(true) == planes_of(&rgba, w, h));
+    }
+
+    #[test]
     fn a_flat_colour_round_trips_within_two_code_values() {
         // Every colour on a coarse grid, each a flat 2×2 block (no chroma subsampling loss).
         for r in (0..=255).step_by(15) {
             for g in (0..=255).step_by(15) {
                 for b in (0..=255).step_by(15) {
                     let px = [r as u8, g as u8, b as u8, 255].repeat(4);
-                    let (y, u, v) = convert(&px, 2, 2);
+                    let (y, u, v) = planes_of(&px, 2, 2);
                     let back = i420_to_rgba(&y, &u, &v, 2, 2);
                     for k in 0..3 {
                         let d = (i32::from(back[k]) - i32::from(px[k])).abs();
@@ -305,7 +369,7 @@ mod tests {
                 [x, x / 2 + 40, 255 - x, 255]
             })
             .collect();
-        let (y, u, v) = convert(&rgba, w, h);
+        let (y, u, v) = planes_of(&rgba, w, h);
         let back = i420_to_rgba(&y, &u, &v, w, h);
         let bias: f64 = back
             .chunks_exact(4)
@@ -333,7 +397,7 @@ mod tests {
                 }
             })
             .collect();
-        let (y, u, v) = convert(&rgba, w, h);
+        let (y, u, v) = planes_of(&rgba, w, h);
         let nearest = i420_to_rgba(&y, &u, &v, w, h);
         let filtered = i420_to_rgba_filtered(&y, &u, &v, w, h);
         // Far from the edge both are the same; next to it the filtered one blends.
