@@ -46,7 +46,10 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>) {
         let offset = dir * (sqrt(t) * r);
         let q = clamp(p + vec2<i32>(round(offset)), vec2<i32>(0), frame_size() - 1);
         sum += src[index_of(q)].rgb;
-        dir = vec2<f32>(dir.x * GOLDEN_COS - dir.y * GOLDEN_SIN, dir.x * GOLDEN_SIN + dir.y * GOLDEN_COS);
+        dir = vec2<f32>(
+            dir.x * GOLDEN_COS - dir.y * GOLDEN_SIN,
+            dir.x * GOLDEN_SIN + dir.y * GOLDEN_COS,
+        );
     }
     out_dof[k] = vec4<f32>(sum / f32(TAPS), 1.0);
 }

@@ -43,7 +43,8 @@ impl BenchConfig {
 /// `presets`: the named presets. `rungs`: every translucency rung and cut, unfoveated.
 /// `knobs`: presets, rungs, shadows and specular off and depth of field on (of `full` and
 /// `balanced`), and single-knob variations of `balanced` (MAR slope, ξ, probability form,
-/// saliency, reprojection, reconstruction, noise, compaction) and the encoder. Any other value is a comma-separated list of names from `knobs`.
+/// saliency, reprojection, reconstruction, noise, compaction) and the encoder. Any other value
+/// is a comma-separated list of names from `knobs`.
 pub fn sweep(which: &str) -> Result<Vec<BenchConfig>, String> {
     let presets: Vec<BenchConfig> = Preset::ALL
         .iter()
