@@ -368,14 +368,16 @@ fn save(
 }
 
 /// How a floor row shows our conversion: each chroma sample over its block, or filtered
-/// between blocks.
+/// between blocks; or chroma at every pixel (4:4:4), what the 8-bit codes alone cost.
 enum Floor {
     Rounded,
     Filtered,
+    Full,
 }
 
 /// The floor under every codec that codes 8-bit 4:2:0 YCbCr: our colour conversion alone, no
-/// compression.
+/// compression; and under one that kept every chroma sample (4:4:4), which neither openh264
+/// nor a browser's H.264 decoder offers.
 fn floors(frames: &Frames, viewing: &Viewing) -> Vec<FloorRow> {
     let (w, h) = (viewing.width as usize, viewing.height as usize);
     let mut rows = Vec::new();
@@ -385,6 +387,10 @@ fn floors(frames: &Frames, viewing: &Viewing) -> Vec<FloorRow> {
             "I420 round trip, rounded, chroma filtered when shown (no codec)",
             Floor::Filtered,
         ),
+        (
+            "YCbCr 4:4:4 round trip, rounded (no codec, no chroma subsampling)",
+            Floor::Full,
+        ),
     ] {
         let (mut fov, mut whole) = (Vec::new(), Vec::new());
         for (g, rgba) in frames {
@@ -393,6 +399,7 @@ fn floors(frames: &Frames, viewing: &Viewing) -> Vec<FloorRow> {
             let back = match conversion {
                 Floor::Rounded => yuv::picture_to_rgba(&pic),
                 Floor::Filtered => yuv::picture_to_rgba_filtered(&pic),
+                Floor::Full => yuv::ycbcr444_round_trip(rgba, w, h),
             };
             let (f, a) = score(viewing, rgba, &back, *g);
             fov.push(f);

@@ -27,7 +27,7 @@ pub struct CodecRow {
     pub encode_ms: Spread,
 }
 
-/// FLIP of a conversion alone (no codec): the best any 4:2:0 codec can show.
+/// FLIP of a conversion alone (no codec): the best any 4:2:0 (or 4:4:4) codec can show.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct FloorRow {
     pub name: String,

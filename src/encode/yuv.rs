@@ -117,18 +117,11 @@ fn convert(
     v: &mut [u8],
     luma_by_rows: bool,
 ) {
-    // u32 holds 255 · 2^24 + 2^23.
-    let luma = |p: &[u8]| {
-        let (r, g, b) = (u32::from(p[0]), u32::from(p[1]), u32::from(p[2]));
-        ((5_016_388 * r + 9_848_226 * g + 1_912_603 * b + (1 << 23)) >> 24) as u8
-    };
     let luma_row = |row: &[u8], out: &mut [u8]| {
         for (o, p) in out.iter_mut().zip(row.chunks_exact(4)) {
             *o = luma(p);
         }
     };
-    const ONE: i64 = 1 << 24;
-    let chroma = |x: i64| ((128 * ONE + x + ONE / 2) >> 24).clamp(0, 255) as u8;
     let hw = width / 2;
     let mut rows = rgba.chunks_exact(4 * width);
     for by in 0..height / 2 {
@@ -158,12 +151,47 @@ fn convert(
             let sum = |c: usize| {
                 i64::from(t[c]) + i64::from(t[c + 4]) + i64::from(b[c]) + i64::from(b[c + 4])
             };
-            let (r, g, bl) = (sum(0), sum(1), sum(2));
-            // Cb = 128 + (B − Y)/1.772, Cr = 128 + (R − Y)/1.402 of the block's mean.
-            *cu = chroma(2_097_152 * bl - 707_730 * r - 1_389_422 * g);
-            *cv = chroma(2_097_152 * r - 1_756_103 * g - 341_049 * bl);
+            (*cu, *cv) = block_chroma(sum(0), sum(1), sum(2));
         }
     }
+}
+
+/// Y = 0.299 R + 0.587 G + 0.114 B of one pixel (its first three bytes), rounded.
+#[inline(always)]
+fn luma(p: &[u8]) -> u8 {
+    // u32 holds 255 · 2^24 + 2^23.
+    let (r, g, b) = (u32::from(p[0]), u32::from(p[1]), u32::from(p[2]));
+    ((5_016_388 * r + 9_848_226 * g + 1_912_603 * b + (1 << 23)) >> 24) as u8
+}
+
+/// Cb = 128 + (B − Y)/1.772 and Cr = 128 + (R − Y)/1.402 of the mean of four pixels, from
+/// their sums of R, G and B.
+#[inline(always)]
+fn block_chroma(r: i64, g: i64, b: i64) -> (u8, u8) {
+    const ONE: i64 = 1 << 24;
+    let code = |x: i64| ((128 * ONE + x + ONE / 2) >> 24).clamp(0, 255) as u8;
+    (
+        code(2_097_152 * b - 707_730 * r - 1_389_422 * g),
+        code(2_097_152 * r - 1_756_103 * g - 341_049 * b),
+    )
+}
+
+/// `rgba` converted to 8-bit YCbCr with the arithmetic of [`rgba_to_i420`] but chroma kept at
+/// every pixel (4:4:4), and back as [`i420_to_rgba`] shows it: what 8-bit YCbCr costs a
+/// picture before any chroma is subsampled (the codec sweep's floor rows).
+pub fn ycbcr444_round_trip(rgba: &[u8], width: usize, height: usize) -> Vec<u8> {
+    let n = width * height;
+    let (mut y, mut u, mut v) = (vec![0; n], vec![0; n], vec![0; n]);
+    for (i, p) in rgba.chunks_exact(4).take(n).enumerate() {
+        let [r, g, b] = [0, 1, 2].map(|c| i64::from(p[c]));
+        y[i] = luma(p);
+        // The chroma of a 2×2 block of four copies of the pixel.
+        (u[i], v[i]) = block_chroma(4 * r, 4 * g, 4 * b);
+    }
+    to_rgba(&y, width, height, |px, py| {
+        let c = py * width + px;
+        (f32::from(u[c]), f32::from(v[c]))
+    })
 }
 
 /// A decoded picture (any strides) as RGBA, rounded as `i420_to_rgba`.
@@ -356,6 +384,38 @@ mod tests {
                 }
             }
         }
+    }
+
+    #[test]
+    fn full_chroma_keeps_each_pixels_colour_where_subsampling_mixes_them() {
+        // Red and blue pixels in a checkerboard: every 2×2 block mixes them.
+        let (w, h) = (6, 4);
+        let px: Vec<u8> = (0..w * h)
+            .flat_map(|i| {
+                let red = (i % w + i / w) % 2 == 0;
+                if red {
+                    [230, 20, 10, 255]
+                } else {
+                    [15, 30, 220, 255]
+                }
+            })
+            .collect();
+        let worst = |back: &[u8]| {
+            let diff = |(a, b): (&u8, &u8)| (i32::from(*a) - i32::from(*b)).abs();
+            back.iter().zip(&px).map(diff).max().unwrap_or(0)
+        };
+        let full = ycbcr444_round_trip(&px, w, h);
+        assert_eq!(full.len(), px.len());
+        assert!(worst(&full) <= 2, "4:4:4 off by {}", worst(&full));
+        let (y, u, v) = planes_of(&px, w, h);
+        assert!(worst(&i420_to_rgba(&y, &u, &v, w, h)) > 50);
+        // A flat picture comes back as the 4:2:0 one does, to the byte.
+        let flat = [90, 160, 40, 255].repeat(w * h);
+        let (y, u, v) = planes_of(&flat, w, h);
+        assert_eq!(
+            ycbcr444_round_trip(&flat, w, h),
+            i420_to_rgba(&y, &u, &v, w, h)
+        );
     }
 
     #[test]

@@ -1,6 +1,7 @@
 //! Bitrate against foveal quality, one line per codec family (plain, low-passed, inset): the
-//! curve to the left and below wins. The target configuration's quality and the 4:2:0 floor
-//! are drawn as horizontal lines, so "equal quality" and "unreachable" can be read off.
+//! curve to the left and below wins. The target configuration's quality and the floors of
+//! 4:2:0 and 4:4:4 8-bit YCbCr are drawn as horizontal lines, so "equal quality" and
+//! "unreachable" can be read off.
 
 use plotters::coord::Shift;
 use plotters::prelude::*;
@@ -17,6 +18,8 @@ pub struct CodecPlot {
     pub target: Option<f64>,
     /// The rounded 4:2:0 conversion's foveal FLIP.
     pub floor: Option<f64>,
+    /// The same with chroma at every pixel (4:4:4): what no 8-bit YCbCr codec goes under.
+    pub floor_444: Option<f64>,
 }
 
 impl CodecPlot {
@@ -51,6 +54,11 @@ impl CodecPlot {
                 .find(|x| x.name == TARGET)
                 .map(|x| x.flip_fovea),
             floor: r.floors.first().map(|f| f.flip_fovea),
+            floor_444: r
+                .floors
+                .iter()
+                .find(|f| f.name.contains("4:4:4"))
+                .map(|f| f.flip_fovea),
         }
     }
 }
@@ -84,6 +92,11 @@ impl Plot for CodecPlot {
         for (level, name, c) in [
             (self.target, format!("{TARGET}'s foveal FLIP"), BLACK),
             (self.floor, "4:2:0 conversion alone".to_string(), colour(5)),
+            (
+                self.floor_444,
+                "4:4:4 conversion alone".to_string(),
+                colour(7),
+            ),
         ] {
             let Some(y) = level else { continue };
             chart
