@@ -202,11 +202,11 @@ fn route(f: &mut Recorder, l: u32, pulling: bool) {
     f.route("pull_push.planes_in", PLANES[other]);
 }
 
-/// Invocations a dispatch needs per axis: one per cell pulling, one per 2×2 block of cells
-/// sharing their parents pushing (blocks start at odd cells, so a side of n has n/2 + 1).
+/// Invocations a dispatch needs per axis: one per cell pulling; pushing, one per 2×2 quads
+/// of cells (quads start at odd cells, so a side of n has n/2 + 1 of them).
 fn dispatch_cells(entry: &str, size: [u32; 2]) -> [u32; 2] {
     if entry.starts_with("push") {
-        size.map(|n| n / 2 + 1)
+        size.map(|n| (n / 2 + 1).div_ceil(2))
     } else {
         size
     }
