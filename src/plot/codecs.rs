@@ -18,7 +18,7 @@ pub struct CodecPlot {
     pub target: Option<f64>,
     /// The rounded 4:2:0 conversion's foveal FLIP.
     pub floor: Option<f64>,
-    /// The same with chroma at every pixel (4:4:4): what no 8-bit YCbCr codec goes under.
+    /// The same with chroma at every pixel (4:4:4): about the best an 8-bit YCbCr codec shows.
     pub floor_444: Option<f64>,
 }
 
