@@ -190,6 +190,15 @@ fn sample(row: &[[f32; 3]], (x0, x1, tx): (u32, u32, f32)) -> [f32; 3] {
     std::array::from_fn(|c| a[c] + (b[c] - a[c]) * tx)
 }
 
+/// Writes the blend of `a` and `b` at `t` into a pixel's RGB. `as u8` saturates (and sends
+/// NaN to 0); + 0.5 rounds the non-negative blend without a libm call per channel.
+#[inline(always)]
+fn put(px: &mut [u8], a: [f32; 3], b: [f32; 3], t: f32) {
+    for c in 0..3 {
+        px[c] = (a[c] + (b[c] - a[c]) * t + 0.5) as u8;
+    }
+}
+
 /// The frame low-passed by eccentricity around `gaze` (normalised). Pixels whose level is 0
 /// are copied exactly.
 ///
@@ -212,52 +221,81 @@ pub fn low_pass(
         return rgba.to_vec();
     }
     let pyr = pyramid(rgba, width, height);
-    // Horizontal taps per level, the same for every row.
-    let xtaps: Vec<Vec<(u32, u32, f32)>> = pyr
-        .iter()
-        .enumerate()
-        .map(|(j, l)| (0..width).map(|x| tap(x, j + 1, l.w)).collect())
-        .collect();
-    let mut rows: Vec<Vec<[f32; 3]>> = pyr.iter().map(|l| vec![[0.0; 3]; l.w as usize]).collect();
+    // Horizontal taps per level, the same for every row; level 0 reads the pixel itself
+    // (weight 0 on a second tap at the same place, which leaves the value exact).
+    let mut xtaps: Vec<Vec<(u32, u32, f32)>> = vec![(0..width).map(|x| (x, x, 0.0)).collect()];
+    xtaps.extend(
+        pyr.iter()
+            .enumerate()
+            .map(|(j, l)| (0..width).map(|x| tap(x, j + 1, l.w)).collect()),
+    );
+    // Row buffers: the frame's own row (level 0), then each level's row interpolated
+    // vertically.
+    let mut rows: Vec<Vec<[f32; 3]>> = vec![vec![[0.0; 3]; width as usize]];
+    rows.extend(pyr.iter().map(|l| vec![[0.0; 3]; l.w as usize]));
     let mut out = rgba.to_vec();
+    let stride = (width * 4) as usize;
     for y in 0..height {
         let row_levels = &levels[(y * width) as usize..((y + 1) * width) as usize];
         let top = row_levels.iter().fold(0.0f32, |m, l| m.max(*l));
         if top <= 0.0 {
             continue;
         }
+        let src = &rgba[y as usize * stride..][..stride];
+        for (v, p) in rows[0].iter_mut().zip(src.chunks_exact(4)) {
+            *v = [0, 1, 2].map(|c| f32::from(p[c]));
+        }
         // Levels 1..=ceil(top) are read in this row: interpolate them vertically once.
         let needed = (top.ceil() as usize).clamp(1, MAX_LEVEL);
-        for (j, (level, row)) in pyr.iter().zip(rows.iter_mut()).enumerate().take(needed) {
+        for (j, (level, row)) in pyr
+            .iter()
+            .zip(rows[1..].iter_mut())
+            .enumerate()
+            .take(needed)
+        {
             let (y0, y1, ty) = tap(y, j + 1, level.h);
             for (x, v) in row.iter_mut().enumerate() {
                 let (a, b) = (level.at(x as u32, y0), level.at(x as u32, y1));
                 *v = std::array::from_fn(|c| a[c] + (b[c] - a[c]) * ty);
             }
         }
-        let stride = (width * 4) as usize;
-        let src = &rgba[y as usize * stride..][..stride];
         let dst = &mut out[y as usize * stride..][..stride];
-        for (x, (&l, px)) in row_levels.iter().zip(dst.chunks_exact_mut(4)).enumerate() {
+        // Runs of pixels on the same pair of levels, so each run reads two rows and their
+        // taps without choosing them per pixel.
+        let mut x = 0;
+        while x < row_levels.len() {
+            let l = row_levels[x];
             if l <= 0.0 {
+                x += 1;
                 continue;
             }
             let k = (l as usize).min(MAX_LEVEL);
-            let t = l - k as f32;
-            let a = match k {
-                0 => std::array::from_fn(|c| f32::from(src[4 * x + c])),
-                _ => sample(&rows[k - 1], xtaps[k - 1][x]),
-            };
-            let b = if t > 0.0 && k < MAX_LEVEL {
-                sample(&rows[k], xtaps[k][x])
-            } else {
-                a
-            };
-            for c in 0..3 {
-                // `as u8` saturates (and sends NaN to 0); + 0.5 rounds the non-negative blend
-                // without a libm call per channel.
-                px[c] = (a[c] + (b[c] - a[c]) * t + 0.5) as u8;
+            let end = row_levels[x..]
+                .iter()
+                .position(|&m| m <= 0.0 || (m as usize).min(MAX_LEVEL) != k)
+                .map_or(row_levels.len(), |n| x + n);
+            let (ra, ta) = (&rows[k], &xtaps[k][x..end]);
+            let run = row_levels[x..end]
+                .iter()
+                .zip(dst[4 * x..4 * end].chunks_exact_mut(4));
+            // The level above, but for the coarsest level, which blends with nothing.
+            match (rows.get(k + 1), xtaps.get(k + 1)) {
+                (Some(rb), Some(tb)) => {
+                    for (((&l, px), &qa), &qb) in run.zip(ta).zip(&tb[x..end]) {
+                        let t = l - k as f32;
+                        let a = sample(ra, qa);
+                        let b = if t > 0.0 { sample(rb, qb) } else { a };
+                        put(px, a, b, t);
+                    }
+                }
+                _ => {
+                    for ((&l, px), &qa) in run.zip(ta) {
+                        let a = sample(ra, qa);
+                        put(px, a, a, l - k as f32);
+                    }
+                }
             }
+            x = end;
         }
     }
     out
