@@ -317,8 +317,7 @@ fn bilinear_weight(f: vec2<f32>, j: i32) -> f32 {
     return wxy.x * wxy.y;
 }
 
-// The four parents around a cell, in bilinear order from the one at `q` (smallest x and y);
-// `ps` is their side in pixels.
+// The four parents around a cell, in bilinear order from the one with the smallest x and y.
 struct Parents { p0: Plane, p1: Plane, p2: Plane, p3: Plane }
 
 // The coarse plane at a level-`l` cell centre from its parents (`parent_base`'s, loaded by the
