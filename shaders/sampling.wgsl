@@ -298,8 +298,11 @@ fn decide(p: vec2<i32>, acuity: f32, salient: f32) {
     if (has_mode(MODE_SALIENCY) && f < 1.0) {
         var s = salient;
         if (has_mode(MODE_EDGES_AT_MAR)) {
-            // One sample per pixel across an edge, one per resolvable cell along it.
-            s *= sqrt(f);
+            // One sample per pixel across an edge, one per resolvable cell along it, for the
+            // acuity of the nearest point the eye may be looking at (the gaze is known only to
+            // within EDGE_MARGIN_DEG). CPU twin: optics::acuity::edge_eccentricity_deg.
+            let e = max(eccentricity_deg(centre) - f32(EDGE_MARGIN_DEG), 0.0);
+            s *= sqrt(acuity_probability(frame.mar_slope * e + frame.mar_w0_deg));
         }
         f = max(f, s);
     }

@@ -39,6 +39,18 @@ pub fn acuity_probability(form: ProbabilityForm, w: f64, w_min: f64, w_far: f64)
     }
 }
 
+/// Where the eye may be looking, degrees around the reported gaze: tracker error and the
+/// latency between the gaze sample and the frame on the screen (the same disc the foveal error
+/// is judged in, and that foveated encoding leaves untouched). Whole degrees, shared with WGSL.
+pub const EDGE_MARGIN_DEG: u32 = 5;
+
+/// The eccentricity whose acuity an edge is sampled for with `edges_at_mar`: the nearest the
+/// eye may be to it, [`EDGE_MARGIN_DEG`] closer than the reported gaze says. An edge asks for
+/// S·√p there (one sample per MAR along it), so within the margin edges are sampled fully.
+pub fn edge_eccentricity_deg(e_deg: f64) -> f64 {
+    (e_deg - f64::from(EDGE_MARGIN_DEG)).max(0.0)
+}
+
 /// Angular diameter (radians) of the eye's blur circle for a point at `distance_m` when focused
 /// at `focus_m`, with a pupil of `pupil_mm`: β ≈ A·|1/d_focus − 1/d| (thin lens, small angles).
 /// Distances at or below zero are treated as 1 mm, never divided by.
@@ -71,6 +83,24 @@ mod tests {
             width_cm: 53.0,
             distance_cm: 60.0,
         }
+    }
+
+    #[test]
+    fn edges_are_sampled_for_the_acuity_within_the_margin_nearest_them() {
+        // Inside the margin the eye may be on the edge: the fovea's acuity, whatever the gaze.
+        for e in [0.0, 1.0, 4.999, f64::from(EDGE_MARGIN_DEG)] {
+            assert_eq!(edge_eccentricity_deg(e), 0.0, "{e}°");
+        }
+        // Beyond it the margin less, never negative, and monotone with the eccentricity.
+        assert!((edge_eccentricity_deg(12.5) - 7.5).abs() < 1e-12);
+        let mut last = 0.0;
+        for k in 0..=900 {
+            let e = edge_eccentricity_deg(f64::from(k) * 0.1);
+            assert!(e >= last && e <= f64::from(k) * 0.1);
+            last = e;
+        }
+        // An eccentricity that is not a number (no gaze) samples edges fully.
+        assert_eq!(edge_eccentricity_deg(f64::NAN), 0.0);
     }
 
     #[test]

@@ -25,7 +25,8 @@ pub const MODE_NO_SPECULAR: u32 = 512;
 /// Reconstruction works on colour divided by what the G-buffer predicts (pull-push), so albedo
 /// edges need no extra samples: saliency looks at normals only.
 pub const MODE_DEMODULATED: u32 = 1024;
-/// Saliency raises the probability to S·√p rather than S (edges sampled at the MAR along them).
+/// Saliency raises the probability to S·√p rather than S (edges sampled at the MAR along them,
+/// p the acuity `optics::acuity::EDGE_MARGIN_DEG` nearer the gaze).
 pub const MODE_EDGES_AT_MAR: u32 = 2048;
 /// The photon rungs gather on the coarse lattice and interpolate (`shade.wgsl`, `gather_coarse`).
 pub const MODE_COARSE_GATHER: u32 = 4096;
@@ -64,6 +65,7 @@ pub fn constants() -> Vec<(&'static str, u32)> {
         ("NOT_SPECIALISED", NOT_SPECIALISED),
         ("FLAG_COVERED", FLAG_COVERED),
         ("LOBE_TABLE", crate::optics::specular::ALBEDO_TABLE as u32),
+        ("EDGE_MARGIN_DEG", crate::optics::acuity::EDGE_MARGIN_DEG),
         ("FLAG_SAMPLED", FLAG_SAMPLED),
         ("FLAG_REUSED", FLAG_REUSED),
         ("RUNG_OPAQUE", Rung::Opaque.id()),

@@ -156,7 +156,7 @@ knobs! {
         => |s, v| s.render.foveation.probability = v;
     /// Raise the probability at albedo and normal edges.
     saliency: bool, "bool", Render => |s, v| s.render.foveation.saliency = v;
-    /// Edges ask for S·√p (one sample per MAR along the edge) instead of S.
+    /// Edges ask for S·√p, not S (one sample per MAR along them; p the acuity 5° nearer the gaze).
     edges_at_mar: bool, "bool", Render => |s, v| s.render.foveation.edges_at_mar = v;
     /// Raise the probability where the image moves.
     motion: bool, "bool", Render => |s, v| s.render.foveation.motion = v;

@@ -61,8 +61,10 @@ pub struct Foveation {
     /// Raise the probability at albedo and normal edges (3×3 Sobel, albedo in CIE-Lab).
     pub saliency: bool,
     /// An edge asks for S·√p instead of S: samples a pixel apart across it but only one per
-    /// resolvable cell (the MAR) along it, since an edge is one-dimensional. Off: the thesis's
-    /// eq. 3, where an edge pixel is shaded at any eccentricity.
+    /// resolvable cell (the MAR) along it, since an edge is one-dimensional; p is the acuity
+    /// 5° nearer the gaze (`optics::acuity::EDGE_MARGIN_DEG`: where the eye may be), so edges
+    /// within 5° are sampled fully. Off: the thesis's eq. 3, where an edge pixel is shaded at
+    /// any eccentricity.
     #[serde(default)]
     pub edges_at_mar: bool,
     /// Raise the probability where the image moves.
