@@ -34,9 +34,10 @@ struct Level {
     floor: f32,
     depth_tolerance: f32,
     material_tolerance: f32,
-    // Texels a row of the staging buffers holds at this level.
+    // Texels a row of the staging buffers holds at this level; pull_pixels: also at level 2
+    // (its `near` level, which it writes after level 1's layers).
     row: u32,
-    pad: u32,
+    next_row: u32,
 }
 @group(0) @binding(6) var<uniform> level: Level;
 
@@ -68,18 +69,11 @@ fn load_cell(q: vec2<u32>) -> Cell {
     return Cell(a.rgb, a.a, b.xy, vec3<f32>(b.z, b.w, c.a), c.rgb, d.rgb, d.a, e.x, e.y, e.z, e.w, m);
 }
 
-// Where layer 0 of this level's cell `c` sits in a staging buffer, and how far apart layers are.
-fn staged(c: vec2<u32>) -> u32 {
-    return c.y * level.row + c.x;
-}
-fn staged_layer() -> u32 {
-    return level.size.y * level.row;
-}
-
-// The moments of this level's cell `c`, to the staging buffer.
-fn store_cell(c: vec2<u32>, v: Cell) {
-    let i = staged(c);
-    let n = staged_layer();
+// The moments of cell `c` of a level whose layers start at texel `first` of the staging
+// buffers, `rows` rows of `row` texels each.
+fn store_cell(first: u32, row: u32, rows: u32, c: vec2<u32>, v: Cell) {
+    let i = first + c.y * row + c.x;
+    let n = rows * row;
     moments_staged[i] = vec4<f32>(v.c, v.w);
     moments_staged[i + n] = vec4<f32>(v.mean, v.s.x, v.s.y);
     moments_staged[i + 2u * n] = vec4<f32>(v.tx, v.s.z);
@@ -91,8 +85,8 @@ fn store_cell(c: vec2<u32>, v: Cell) {
 // This level's cell `c` completed, to the staging buffer: value and material spread,
 // gradient, depth, range and material.
 fn store_plane(c: vec2<u32>, v: Cell) {
-    let i = staged(c);
-    let n = staged_layer();
+    let i = c.y * level.row + c.x;
+    let n = level.size.y * level.row;
     planes_staged[i] = vec4<f32>(v.c, v.material_var);
     planes_staged[i + n] = vec4<f32>(v.tx, 0.0);
     planes_staged[i + 2u * n] = vec4<f32>(v.ty, v.depth);
@@ -113,9 +107,13 @@ fn material_of(albedo: vec4<f32>) -> f32 {
     return round(albedo.a * 255.0);
 }
 
-// A pixel as a cell: its demodulated colour when it holds a sample, else empty.
+// A pixel as a cell: its demodulated colour when it holds a sample, else (or past the frame)
+// empty.
 fn pixel_cell(p: vec2<i32>) -> Cell {
     var out = empty_cell();
+    if (!in_frame(p)) {
+        return out;
+    }
     let f = flags[index_of(p)];
     if ((f & FLAG_COVERED) != 0u && (f & (FLAG_SAMPLED | FLAG_REUSED)) != 0u) {
         let nd = textureLoad(normal_distance, p, 0);
@@ -187,23 +185,34 @@ fn add_spreads(out: ptr<function, Cell>, ch: Cell) {
     (*out).ty += ch.ty + ch.w * d.y * dc;
 }
 
-// Pixel `i` (0..3, row-major) of level 1's cell `id`, or an empty cell past the frame.
-fn child_pixel(id: vec2<u32>, i: u32) -> Cell {
-    let p = vec2<i32>(2u * id + vec2<u32>(i & 1u, i >> 1u));
-    if (in_frame(p)) {
-        return pixel_cell(p);
+// Level 1's cell `q` merged from its pixels and stored, or an empty cell past the level.
+fn level1_cell(q: vec2<u32>) -> Cell {
+    if (any(q >= level.size)) {
+        return empty_cell();
     }
-    return empty_cell();
+    let p = vec2<i32>(2u * q);
+    let x = vec2<i32>(1, 0);
+    let y = vec2<i32>(0, 1);
+    let m = merge(pixel_cell(p), pixel_cell(p + x), pixel_cell(p + y), pixel_cell(p + x + y));
+    store_cell(0u, level.row, level.size.y, q, m);
+    return m;
 }
 
-// Pull, level 1 from the pixels.
+// Pull, levels 1 and 2 from the pixels: an invocation per level-2 cell makes its four level-1
+// cells and merges them as `pull` would, so level 1 is not read back for level 2 (a dispatch
+// and 24 texel loads a level-2 cell saved).
 @compute @workgroup_size(8, 8)
 fn pull_pixels(@builtin(global_invocation_id) id: vec3<u32>) {
-    if (any(id.xy >= level.size)) {
+    let q = 2u * id.xy;
+    let c0 = level1_cell(q);
+    let c1 = level1_cell(q + vec2<u32>(1u, 0u));
+    let c2 = level1_cell(q + vec2<u32>(0u, 1u));
+    let c3 = level1_cell(q + vec2<u32>(1u, 1u));
+    if (any(id.xy >= level.near_size)) {
         return;
     }
-    let m = merge(child_pixel(id.xy, 0u), child_pixel(id.xy, 1u), child_pixel(id.xy, 2u), child_pixel(id.xy, 3u));
-    store_cell(id.xy, m);
+    let first = 3u * level.size.y * level.row;
+    store_cell(first, level.next_row, level.near_size.y, id.xy, merge(c0, c1, c2, c3));
 }
 
 // Child `i` (0..3, row-major) of cell `id` one level down (the `near` level), or an empty
@@ -223,7 +232,7 @@ fn pull(@builtin(global_invocation_id) id: vec3<u32>) {
         return;
     }
     let m = merge(child_cell(id.xy, 0u), child_cell(id.xy, 1u), child_cell(id.xy, 2u), child_cell(id.xy, 3u));
-    store_cell(id.xy, m);
+    store_cell(0u, level.row, level.size.y, id.xy, m);
 }
 
 // What a parent lends its children: its plane, depth, sample range, and its centre (pixels).
@@ -254,15 +263,8 @@ fn parent_base(centre: vec2<f32>, l: u32) -> vec4<f32> {
 // parent lies on another surface). Sums rather than arrays of parents: on a CPU adapter a local
 // array of structs spills, and this pass runs per pixel.
 struct Blend {
-    c: vec3<f32>,
-    tx: vec3<f32>,
-    ty: vec3<f32>,
-    b: f32,
-    ck: vec3<f32>,
-    txk: vec3<f32>,
-    tyk: vec3<f32>,
-    lo: f32,
-    hi: f32,
+    c: vec3<f32>, tx: vec3<f32>, ty: vec3<f32>, b: f32,
+    ck: vec3<f32>, txk: vec3<f32>, tyk: vec3<f32>, lo: f32, hi: f32,
 }
 
 fn blend_start() -> Blend {

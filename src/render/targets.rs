@@ -150,8 +150,8 @@ fn pyramid(device: &wgpu::Device, r: &mut Resources, width: u32, height: u32) {
             r.texture_array(name, texture);
         }
     }
-    for (name, layers) in pull_push::STAGED {
-        let bytes = pull_push::staged_bytes(width, height, layers);
+    for (name, layers, two) in pull_push::STAGED {
+        let bytes = pull_push::staged_bytes(width, height, layers, two);
         let staging = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some(name),
             size: bytes,

@@ -38,11 +38,12 @@ pub const MOMENTS_STAGED: [&str; 2] =
 pub const PLANES_STAGED: &str = "pull_push.planes_staged";
 /// Layers in each moments staging buffer.
 const STAGED_MOMENT_LAYERS: u32 = MOMENT_LAYERS / 2;
-/// Every staging buffer with its layers, as the targets create them.
-pub const STAGED: [(&str, u32); 3] = [
-    (MOMENTS_STAGED[0], STAGED_MOMENT_LAYERS),
-    (MOMENTS_STAGED[1], STAGED_MOMENT_LAYERS),
-    (PLANES_STAGED, PLANE_LAYERS),
+/// Every staging buffer with its layers and whether level 2 follows level 1 in it (the
+/// moments: `pull_pixels` writes both levels), as the targets create them.
+pub const STAGED: [(&str, u32, bool); 3] = [
+    (MOMENTS_STAGED[0], STAGED_MOMENT_LAYERS, true),
+    (MOMENTS_STAGED[1], STAGED_MOMENT_LAYERS, true),
+    (PLANES_STAGED, PLANE_LAYERS, false),
 ];
 
 pub const PASS: PassDecl = PassDecl {
@@ -83,7 +84,8 @@ pub struct Level {
     material_tolerance: f32,
     /// Texels a row of the staging buffers holds at this level (copies need 256-byte rows).
     row: u32,
-    pad: u32,
+    /// `pull_pixels` only: the same for level 2, which it writes too (`near_*` is level 2's).
+    next_row: u32,
 }
 
 /// Levels above the pixels the GPU keeps (at least one, so a 1×1 frame has a top cell).
@@ -129,7 +131,7 @@ pub fn pyramid_bytes(width: u32, height: u32) -> u64 {
     (texels(false) + texels(true)) * u64::from(MOMENT_LAYERS + PLANE_LAYERS) * 16
         + STAGED
             .iter()
-            .map(|&(_, layers)| staged_bytes(width, height, layers))
+            .map(|&(_, layers, two)| staged_bytes(width, height, layers, two))
             .sum::<u64>()
 }
 
@@ -138,10 +140,21 @@ fn staged_row(w: u32) -> u32 {
     w.next_multiple_of(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT / 16)
 }
 
-/// Bytes of a staging buffer of `layers` layers: level 1, the largest level staged.
-pub fn staged_bytes(width: u32, height: u32, layers: u32) -> u64 {
-    let (w, h) = level_size(width, height, 1);
-    u64::from(staged_row(w)) * u64::from(h.max(1)) * u64::from(layers) * 16
+/// Texels of level `l`'s layers in a staging buffer of `layers` layers.
+fn staged_texels(width: u32, height: u32, l: u32, layers: u32) -> u64 {
+    let (w, h) = level_size(width, height, l);
+    u64::from(staged_row(w)) * u64::from(h.max(1)) * u64::from(layers)
+}
+
+/// Bytes of a staging buffer of `layers` layers: level 1, the largest level staged, and with
+/// `two` level 2 after it (`pull_pixels` writes both levels' moments).
+pub fn staged_bytes(width: u32, height: u32, layers: u32, two: bool) -> u64 {
+    let level2 = if two {
+        staged_texels(width, height, 2, layers)
+    } else {
+        0
+    };
+    (staged_texels(width, height, 1, layers) + level2) * 16
 }
 
 /// Bytes of the level uniforms: one slot per dispatch.
@@ -149,8 +162,8 @@ pub fn levels_bytes(width: u32, height: u32) -> u64 {
     SLOT * (2 * u64::from(levels(width, height)) + 1)
 }
 
-/// One slot per dispatch: pull_pixels, pull per level, push per level from the top,
-/// push_pixels (as level 0).
+/// One slot per dispatch: pull_pixels (levels 1 and 2), pull per level from 3, push per level
+/// from the top, push_pixels (as level 0).
 fn slots(width: u32, height: u32) -> Vec<(&'static str, Level)> {
     let top = levels(width, height);
     let base = |l: u32, ridge: f32| Level {
@@ -172,8 +185,13 @@ fn slots(width: u32, height: u32) -> Vec<(&'static str, Level)> {
         s.near_size = level_size(width, height, l).into();
         s.near_origin = origin(width, height, l);
     };
-    let mut out = vec![("pull_pixels", base(1, 0.0))];
-    for l in 2..=top {
+    let mut first = base(1, 0.0);
+    if top >= 2 {
+        near(&mut first, 2);
+        first.next_row = staged_row(first.near_size[0]);
+    }
+    let mut out = vec![("pull_pixels", first)];
+    for l in 3..=top {
         let mut s = base(l, 0.0);
         near(&mut s, l - 1);
         out.push(("pull", s));
@@ -202,11 +220,14 @@ fn route(f: &mut Recorder, l: u32, pulling: bool) {
     f.route("pull_push.planes_in", PLANES[other]);
 }
 
-/// Invocations a dispatch needs per axis: one per cell pulling; pushing, one per 2×2 quads
-/// of cells (quads start at odd cells, so a side of n has n/2 + 1 of them).
+/// Invocations a dispatch needs per axis: one per cell pulling, one per level-2 cell (2×2
+/// level-1 cells) pulling from the pixels; pushing, one per 2×2 quads of cells (quads start
+/// at odd cells, so a side of n has n/2 + 1 of them).
 fn dispatch_cells(entry: &str, size: [u32; 2]) -> [u32; 2] {
     if entry.starts_with("push") {
         size.map(|n| (n / 2 + 1).div_ceil(2))
+    } else if entry == "pull_pixels" {
+        size.map(|n| n.div_ceil(2))
     } else {
         size
     }
@@ -252,27 +273,58 @@ pub fn record(f: &mut Recorder) -> Result<(), GraphError> {
     Ok(())
 }
 
-/// Copies the level a dispatch wrote from its staging buffers into its atlas.
-fn stage(f: &mut Recorder, pulling: bool, s: &Level) -> Result<(), GraphError> {
-    let own = (s.level % 2) as usize;
-    if pulling {
-        for (i, staged) in MOMENTS_STAGED.into_iter().enumerate() {
-            let first = i as u32 * STAGED_MOMENT_LAYERS;
-            copy(f, staged, MOMENTS[own], first, STAGED_MOMENT_LAYERS, s)?;
-        }
-        return Ok(());
-    }
-    copy(f, PLANES_STAGED, PLANES[own], 0, PLANE_LAYERS, s)
+/// Where a level sits in a staging buffer and in its atlas.
+struct Region {
+    size: [u32; 2],
+    origin: [u32; 2],
+    /// Texels a staging row holds.
+    row: u32,
+    /// Bytes before the level's first layer in the staging buffer.
+    offset: u64,
 }
 
-/// Copies `layers` layers of level `s` from `staged` into `atlas`, from layer `first` on.
+/// Copies the level(s) a dispatch wrote from its staging buffers into their atlases:
+/// `pull_pixels` wrote level 2 (its `near_*`) after level 1's layers.
+fn stage(f: &mut Recorder, pulling: bool, s: &Level) -> Result<(), GraphError> {
+    let own = Region {
+        size: s.size,
+        origin: s.origin,
+        row: s.row,
+        offset: 0,
+    };
+    if !pulling {
+        let atlas = PLANES[(s.level % 2) as usize];
+        return copy(f, PLANES_STAGED, atlas, 0, PLANE_LAYERS, &own);
+    }
+    let mut regions = vec![(s.level, own)];
+    if s.level == 1 && s.near_size[0] > 0 {
+        let level1 = u64::from(s.row) * u64::from(s.size[1]) * u64::from(STAGED_MOMENT_LAYERS);
+        let level2 = Region {
+            size: s.near_size,
+            origin: s.near_origin,
+            row: s.next_row,
+            offset: level1 * 16,
+        };
+        regions.push((2, level2));
+    }
+    for (l, r) in &regions {
+        let atlas = MOMENTS[(l % 2) as usize];
+        for (i, staged) in MOMENTS_STAGED.into_iter().enumerate() {
+            let first = i as u32 * STAGED_MOMENT_LAYERS;
+            copy(f, staged, atlas, first, STAGED_MOMENT_LAYERS, r)?;
+        }
+    }
+    Ok(())
+}
+
+/// Copies `layers` layers of the level at `r` from `staged` into `atlas`, from layer `first` on.
 fn copy(
     f: &mut Recorder,
     staged: &'static str,
     atlas: &'static str,
     first: u32,
     layers: u32,
-    s: &Level,
+    r: &Region,
 ) -> Result<(), GraphError> {
     let missing = |name| GraphError::Missing {
         pass: PASS.label,
@@ -284,24 +336,24 @@ fn copy(
         wgpu::TexelCopyBufferInfo {
             buffer,
             layout: wgpu::TexelCopyBufferLayout {
-                offset: 0,
-                bytes_per_row: Some(s.row * 16),
-                rows_per_image: Some(s.size[1]),
+                offset: r.offset,
+                bytes_per_row: Some(r.row * 16),
+                rows_per_image: Some(r.size[1]),
             },
         },
         wgpu::TexelCopyTextureInfo {
             texture,
             mip_level: 0,
             origin: wgpu::Origin3d {
-                x: s.origin[0],
-                y: s.origin[1],
+                x: r.origin[0],
+                y: r.origin[1],
                 z: first,
             },
             aspect: wgpu::TextureAspect::All,
         },
         wgpu::Extent3d {
-            width: s.size[0],
-            height: s.size[1],
+            width: r.size[0],
+            height: r.size[1],
             depth_or_array_layers: layers,
         },
     );
