@@ -4,21 +4,22 @@
 // divided by albedo (floor `level.floor`) so texture edges come back from the G-buffer, not from
 // samples. CPU twin and the reasoning: foveation::pull_push.
 
-@group(0) @binding(1) var<storage, read> color: array<vec4<f32>>;
+// The shaded colour, filled in place where a pixel holds no sample (the next frame's history
+// was copied from it before this pass).
+@group(0) @binding(1) var<storage, read_write> color: array<vec4<f32>>;
 @group(0) @binding(2) var<storage, read> flags: array<u32>;
 @group(0) @binding(3) var albedo_tex: texture_2d<f32>;
-@group(0) @binding(5) var<storage, read_write> out_resolved: array<vec4<f32>>;
-@group(0) @binding(7) var normal_distance: texture_2d<f32>;
+@group(0) @binding(6) var normal_distance: texture_2d<f32>;
 // The pyramid is read from textures: a software adapter gathers a texel per lane at once but
 // loads buffer values one lane at a time. Levels alternate between two atlases (odd and even
 // levels); `_in` is routed per dispatch. A dispatch writes its level to staging buffers (a
 // storage texture's store costs there seven times a buffer's), copied into the atlas after
 // it; the moments in two buffers of three layers (lavapipe binds at most 128 MiB).
 @group(0) @binding(4) var<storage, read_write> moments_staged: array<vec4<f32>>;
-@group(0) @binding(11) var<storage, read_write> moments_staged_hi: array<vec4<f32>>;
-@group(0) @binding(8) var moments_in: texture_2d_array<f32>;
-@group(0) @binding(9) var planes_in: texture_2d_array<f32>;
-@group(0) @binding(10) var<storage, read_write> planes_staged: array<vec4<f32>>;
+@group(0) @binding(10) var<storage, read_write> moments_staged_hi: array<vec4<f32>>;
+@group(0) @binding(7) var moments_in: texture_2d_array<f32>;
+@group(0) @binding(8) var planes_in: texture_2d_array<f32>;
+@group(0) @binding(9) var<storage, read_write> planes_staged: array<vec4<f32>>;
 
 // One level's dispatch: this level's size and corner in its atlas, and the same of its
 // neighbour level (pull: the children's level below; push: the parents' level above).
@@ -39,7 +40,7 @@ struct Level {
     row: u32,
     next_row: u32,
 }
-@group(0) @binding(6) var<uniform> level: Level;
+@group(0) @binding(5) var<uniform> level: Level;
 
 // Moments (pull): c, w, mean, scatter s = (xx, xy, yy), cross terms t per axis, mean depth and
 // material id with their spreads, sample range (lo, hi over all channels). Six layers per cell:
@@ -466,7 +467,7 @@ fn push_cell(c: vec2<i32>, par: Parents) {
     store_plane(vec2<u32>(c), out);
 }
 
-// Every pixel: background, its own sample, or level 1's planes times its albedo.
+// Every pixel without a sample: level 1's planes times its proxy.
 @compute @workgroup_size(8, 8)
 fn push_pixels(@builtin(global_invocation_id) id: vec3<u32>) {
     push_block(id.xy * 2u, true);
@@ -476,14 +477,11 @@ fn push_pixel(p: vec2<i32>, par: Parents) {
     if (!in_frame(p)) {
         return;
     }
+    // The background and the samples are in place already (the sampling pass wrote the one,
+    // shading and reuse the other): only pixels without a sample are written.
     let k = index_of(p);
     let f = flags[k];
-    if ((f & FLAG_COVERED) == 0u) {
-        out_resolved[k] = vec4<f32>(frame.background, 1.0);
-        return;
-    }
-    if ((f & (FLAG_SAMPLED | FLAG_REUSED)) != 0u) {
-        out_resolved[k] = vec4<f32>(color[k].rgb, 1.0);
+    if ((f & FLAG_COVERED) == 0u || (f & (FLAG_SAMPLED | FLAG_REUSED)) != 0u) {
         return;
     }
     // Bounded by the samples around the pixel: a plane cannot overshoot what they hold.
@@ -495,5 +493,5 @@ fn push_pixel(p: vec2<i32>, par: Parents) {
     if (coarse.lo <= coarse.hi) {
         lit = clamp(lit, vec3<f32>(coarse.lo), vec3<f32>(coarse.hi));
     }
-    out_resolved[k] = vec4<f32>(max(lit * proxy(nd, albedo), vec3<f32>(0.0)), 1.0);
+    color[k] = vec4<f32>(max(lit * proxy(nd, albedo), vec3<f32>(0.0)), 1.0);
 }

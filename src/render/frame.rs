@@ -102,6 +102,8 @@ pub fn record(f: &mut Recorder, plan: &FramePlan, mesh: &MeshBuffers) -> Result<
         } else {
             shade::record_grid(f, false)?;
         }
+        // Before reconstruction: pull-push fills `shade.color` in place.
+        keep_color_history(f)?;
         if plan.pull_push {
             pull_push::record(f)?;
         } else {
@@ -131,7 +133,7 @@ pub fn record_prefix(
 }
 
 /// What comes after shading: depth of field, the output image (low-passed and converted to
-/// I420 when asked), and the next frame's history.
+/// I420 when asked), and the next frame's history (its colour already, when foveated).
 pub fn record_suffix(f: &mut Recorder, plan: &FramePlan) -> Result<(), GraphError> {
     if plan.dof {
         dof::record(f)?;
@@ -143,8 +145,14 @@ pub fn record_suffix(f: &mut Recorder, plan: &FramePlan) -> Result<(), GraphErro
     if plan.i420 {
         i420::record(f)?;
     }
-    keep_history(f)
+    if !plan.foveated {
+        keep_color_history(f)?;
+    }
+    keep_depth_history(f)
 }
+
+/// The port of the reconstructed colour (resolve's or pull-push's), for inspection.
+pub const RECONSTRUCTED: &str = "frame.reconstructed";
 
 /// What the next frame reuses: this frame's shaded colour and G-buffer normal + distance.
 pub const HISTORY: [(&str, &str); 2] = [
@@ -152,15 +160,21 @@ pub const HISTORY: [(&str, &str); 2] = [
     ("gbuffer.normal_distance", "history.normal_distance"),
 ];
 
-fn keep_history(f: &mut Recorder) -> Result<(), GraphError> {
+/// The shaded colour: samples (and what reuse carried) only, never a reconstruction.
+fn keep_color_history(f: &mut Recorder) -> Result<(), GraphError> {
+    let [(color, history_color), _] = HISTORY;
+    let (src, dst) = (f.buffer(color)?.clone(), f.buffer(history_color)?.clone());
+    f.encoder
+        .copy_buffer_to_buffer(&src, 0, &dst, 0, src.size());
+    Ok(())
+}
+
+fn keep_depth_history(f: &mut Recorder) -> Result<(), GraphError> {
     let missing = |name| GraphError::Missing {
         pass: "history",
         name,
     };
-    let [(color, history_color), (nd, history_nd)] = HISTORY;
-    let (src, dst) = (f.buffer(color)?.clone(), f.buffer(history_color)?.clone());
-    f.encoder
-        .copy_buffer_to_buffer(&src, 0, &dst, 0, src.size());
+    let [_, (nd, history_nd)] = HISTORY;
     let src = f.resources.get_texture(nd).ok_or(missing(nd))?.0;
     let dst = f
         .resources

@@ -1,5 +1,6 @@
 //! Reading a stream's intermediate images back for tests and diagnostics.
 
+use super::frame::RECONSTRUCTED;
 use super::pass::jfa;
 use super::pass::photons::SIDE as PHOTON_SIDE;
 use super::renderer::Renderer;
@@ -48,8 +49,12 @@ impl Renderer {
                     .or_else(|_| t.texture(jfa::PING))?,
                 4,
             )?),
-            color: quads(buf("shade.color")?),
-            resolved: quads(buf("resolve.color")?),
+            // The shaded colour as the next frame's history keeps it: pull-push has since
+            // filled `shade.color` itself in place.
+            color: quads(buf("history.color")?),
+            resolved: quads(
+                buf(t.routes.resolve(RECONSTRUCTED)).or_else(|_| buf("resolve.color"))?,
+            ),
             albedo: bytemuck::pod_collect_to_vec(&read_texture(
                 &self.gpu,
                 t.texture("gbuffer.albedo")?,

@@ -13,6 +13,7 @@ use crate::foveation::pull_push::{
     level_count, level_size, DEMODULATION_FLOOR, DEPTH_TOLERANCE, LAMBDA, LAMBDA_TOP,
     MATERIAL_TOLERANCE,
 };
+use crate::render::frame::RECONSTRUCTED;
 use crate::render::graph::{
     dynamic_uniform, layers, read, texture, uniform, write, DispatchSize, GraphError, PassDecl,
     Recorder,
@@ -52,11 +53,11 @@ pub const PASS: PassDecl = PassDecl {
     first_binding: 0,
     bindings: &[
         uniform("frame.uniform"),
-        read("shade.color"),
+        // Filled in place: the pixels without a sample are written, the rest stay.
+        write("shade.color"),
         read("sampling.flags"),
         texture("gbuffer.albedo"),
         write(MOMENTS_STAGED[0]),
-        write("resolve.color"),
         dynamic_uniform("pull_push.levels", std::mem::size_of::<Level>() as u64),
         texture("gbuffer.normal_distance"),
         layers("pull_push.moments_in"),
@@ -233,7 +234,8 @@ fn dispatch_cells(entry: &str, size: [u32; 2]) -> [u32; 2] {
     }
 }
 
-/// Fills the frame; from here on `frame.color` is the reconstructed colour.
+/// Fills the frame in place (`shade.color`, whose samples the next frame's history already
+/// holds: `frame::record`); from here on `frame.color` is the reconstructed colour.
 pub fn record(f: &mut Recorder) -> Result<(), GraphError> {
     let (width, height) = f.size;
     let slots = slots(width, height);
@@ -269,7 +271,8 @@ pub fn record(f: &mut Recorder) -> Result<(), GraphError> {
             stage(f, entry.starts_with("pull"), s)?;
         }
     }
-    f.route("frame.color", "resolve.color");
+    f.route("frame.color", "shade.color");
+    f.route(RECONSTRUCTED, "shade.color");
     Ok(())
 }
 

@@ -26,5 +26,6 @@ pub const PASS: PassDecl = PassDecl {
 pub fn record(f: &mut Recorder) -> Result<(), GraphError> {
     f.run_frame_pass(&PASS)?;
     f.route("frame.color", "resolve.color");
+    f.route(crate::render::frame::RECONSTRUCTED, "resolve.color");
     Ok(())
 }
