@@ -283,7 +283,11 @@ fn extremes_give_finite_sensible_frames() {
     let scene = Scene::builtin("bunny").unwrap();
     let mut cases: Vec<(String, FrameRequest)> = Vec::new();
     for gaze in [[0.0, 0.0], [1.0, 1.0], [0.0, 1.0], [1.0, 0.5], [0.5, 0.5]] {
-        cases.push((format!("gaze {gaze:?}"), foveated("fast", 80, 60, gaze)));
+        for r in [Reconstruction::PullPush, Reconstruction::Nearest] {
+            let mut q = foveated("fast", 80, 60, gaze);
+            q.settings.foveation.reconstruction = r;
+            cases.push((format!("gaze {gaze:?}, {r:?}"), q));
+        }
     }
     for xi in [0.0, 1.0] {
         let mut q = foveated("balanced", 80, 60, [0.0, 0.0]);
@@ -312,7 +316,6 @@ fn extremes_give_finite_sensible_frames() {
     let mut white = foveated("fast", 80, 60, [0.3, 0.3]);
     white.settings.foveation.noise = Noise::White;
     cases.push(("white noise".into(), white));
-
     for (i, (what, mut q)) in cases.into_iter().enumerate() {
         q.stream = 100 + i as u64;
         let frame = r.render(&q).unwrap_or_else(|e| panic!("{what}: {e}"));

@@ -128,6 +128,17 @@ pub fn sweep(which: &str) -> Result<Vec<BenchConfig>, String> {
     knobs.push(BenchConfig::variant("balanced sibson".into(), |s| {
         s.foveation.reconstruction = Reconstruction::Sibson
     }));
+    // The other foveated presets with the reconstructions they had before pull-push.
+    knobs.push(BenchConfig::variant_of(
+        "quality",
+        "quality sibson".into(),
+        |s| s.foveation.reconstruction = Reconstruction::Sibson,
+    ));
+    knobs.push(BenchConfig::variant_of(
+        "fast",
+        "fast nearest".into(),
+        |s| s.foveation.reconstruction = Reconstruction::Nearest,
+    ));
     knobs.push(BenchConfig::variant("balanced edges-at-mar".into(), |s| {
         s.foveation.edges_at_mar = true
     }));

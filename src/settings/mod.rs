@@ -297,13 +297,16 @@ impl RenderSettings {
         };
         let foveation = match preset {
             Preset::Reference | Preset::Full => Foveation::OFF,
+            // Every foveated preset reconstructs with pull-push (docs/foveation.md, one run of
+            // the 14 scene/size groups): against JFA + Sibson, `balanced` was faster on 12 and
+            // closer to `full` within 5° of the gaze on 12, `quality` closer to `full` on all 14
+            // (FLIP) and faster on 8; against JFA + nearest, `fast` was faster on 13.
             Preset::Quality => Foveation {
                 probability: ProbabilityForm::Linear,
                 min_probability: 0.1,
+                reconstruction: Reconstruction::PullPush,
                 ..on
             },
-            // Pull-push: the frame faster than with JFA + Sibson on 12 of 14 scene/size groups,
-            // FLIP within 5° of the gaze closer to `full` on 12 (docs/foveation.md, one run).
             Preset::Balanced => Foveation {
                 min_probability: 0.05,
                 reconstruction: Reconstruction::PullPush,
@@ -312,7 +315,7 @@ impl RenderSettings {
             Preset::Fast => Foveation {
                 mar_slope: 0.034,
                 min_probability: 0.02,
-                reconstruction: Reconstruction::Nearest,
+                reconstruction: Reconstruction::PullPush,
                 ..on
             },
         };
