@@ -94,7 +94,8 @@ impl Scheduler {
             Job::Render { mut request, reply } => {
                 self.arrivals += 1;
                 self.turns.arrive(request.stream);
-                let unfoveated = self.foveation.apply(&self.cost, &mut request);
+                let shared = self.turns.streams() > 1;
+                let unfoveated = self.foveation.apply(&self.cost, &mut request, shared);
                 self.tasks.push(Task {
                     request,
                     reply,

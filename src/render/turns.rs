@@ -15,6 +15,11 @@ pub struct Turns {
 }
 
 impl Turns {
+    /// Streams the thread is serving (those that have asked for a frame and not ended).
+    pub fn streams(&self) -> usize {
+        self.used.len()
+    }
+
     /// `stream` has work again.
     pub fn arrive(&mut self, stream: u64) {
         let now = self.now;
