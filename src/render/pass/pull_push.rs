@@ -301,12 +301,13 @@ fn stage(f: &mut Recorder, pulling: bool, s: &Level) -> Result<(), GraphError> {
     }
     let mut regions = vec![(s.level, own)];
     if s.level == 1 && s.near_size[0] > 0 {
-        let level1 = u64::from(s.row) * u64::from(s.size[1]) * u64::from(STAGED_MOMENT_LAYERS);
+        let (width, height) = f.size;
         let level2 = Region {
             size: s.near_size,
             origin: s.near_origin,
             row: s.next_row,
-            offset: level1 * 16,
+            // Level 1's layers, as `staged_bytes` sized them.
+            offset: staged_texels(width, height, 1, STAGED_MOMENT_LAYERS) * 16,
         };
         regions.push((2, level2));
     }
