@@ -11,10 +11,9 @@
 @group(0) @binding(3) var albedo_tex: texture_2d<f32>;
 @group(0) @binding(6) var normal_distance: texture_2d<f32>;
 // The pyramid is read from textures: a software adapter gathers a texel per lane at once but
-// loads buffer values one lane at a time. Levels alternate between two atlases (odd and even
-// levels); `_in` is routed per dispatch. A dispatch writes its level to staging buffers (a
-// storage texture's store costs there seven times a buffer's), copied into the atlas after
-// it; the moments in two buffers of three layers (lavapipe binds at most 128 MiB).
+// loads buffer values one lane at a time. Levels alternate between two atlases (odd, even);
+// `_in` is routed per dispatch. A dispatch writes its level to staging buffers (there a storage
+// texture's store costs seven times a buffer's), then copied into the atlas.
 @group(0) @binding(4) var<storage, read_write> moments_staged: array<vec4<f32>>;
 @group(0) @binding(10) var<storage, read_write> moments_staged_hi: array<vec4<f32>>;
 @group(0) @binding(7) var moments_in: texture_2d_array<f32>;
@@ -35,10 +34,8 @@ struct Level {
     floor: f32,
     depth_tolerance: f32,
     material_tolerance: f32,
-    // Texels a row of the staging buffers holds at this level; pull_pixels: also at level 2
-    // (its `near` level, which it writes after level 1's layers).
+    // Texels a row of the staging buffers holds at this level.
     row: u32,
-    next_row: u32,
 }
 @group(0) @binding(5) var<uniform> level: Level;
 
@@ -70,11 +67,10 @@ fn load_cell(q: vec2<u32>) -> Cell {
     return Cell(a.rgb, a.a, b.xy, vec3<f32>(b.z, b.w, c.a), c.rgb, d.rgb, d.a, e.x, e.y, e.z, e.w, m);
 }
 
-// The moments of cell `c` of a level whose layers start at texel `first` of the staging
-// buffers, `rows` rows of `row` texels each.
-fn store_cell(first: u32, row: u32, rows: u32, c: vec2<u32>, v: Cell) {
-    let i = first + c.y * row + c.x;
-    let n = rows * row;
+// This level's cell `c`, its moments to the staging buffers.
+fn store_cell(c: vec2<u32>, v: Cell) {
+    let i = c.y * level.row + c.x;
+    let n = level.size.y * level.row;
     moments_staged[i] = vec4<f32>(v.c, v.w);
     moments_staged[i + n] = vec4<f32>(v.mean, v.s.x, v.s.y);
     moments_staged[i + 2u * n] = vec4<f32>(v.tx, v.s.z);
@@ -94,11 +90,10 @@ fn store_plane(c: vec2<u32>, v: Cell) {
     planes_staged[i + 3u * n] = vec4<f32>(v.lo, v.hi, v.material, v.depth_var);
 }
 
-// What the G-buffer alone predicts of a pixel's colour: the key light's Lambert term with the
-// ambient, on the albedo, plus the floor. Reconstruction works on colour / proxy, so texture,
-// normal-map and shading-normal detail come back per pixel and only what the proxy misses
-// (shadows, specular, subsurface light, other lights) is interpolated.
-// `nd` and `albedo` are the pixel's G-buffer texels.
+// What the G-buffer (texels `nd`, `albedo`) alone predicts of a pixel's colour: the key light's
+// Lambert term with the ambient, on the albedo, plus the floor. Reconstruction works on colour
+// / proxy, so texture, normal-map and shading-normal detail come back per pixel and only what
+// the proxy misses (shadows, specular, subsurface light, other lights) is interpolated.
 fn proxy(nd: vec4<f32>, albedo: vec4<f32>) -> vec3<f32> {
     return lambert(nd.xyz, albedo.rgb) + level.floor;
 }
@@ -130,9 +125,8 @@ fn pixel_cell(p: vec2<i32>) -> Cell {
     return out;
 }
 
-// The exact merge of four children (some may be empty), W then clamped to 1. Four named cells
-// rather than an array: a GPU compiler keeps an array indexed in a loop in slow per-thread
-// memory, and these run once per pyramid cell.
+// The exact merge of four children (some may be empty), W then clamped to 1. Named cells, not
+// an array: a GPU compiler keeps an array indexed in a loop in slow per-thread memory.
 fn merge(c0: Cell, c1: Cell, c2: Cell, c3: Cell) -> Cell {
     var out = empty_cell();
     out.w = c0.w + c1.w + c2.w + c3.w;
@@ -186,34 +180,31 @@ fn add_spreads(out: ptr<function, Cell>, ch: Cell) {
     (*out).ty += ch.ty + ch.w * d.y * dc;
 }
 
-// Level 1's cell `q` merged from its pixels and stored, or an empty cell past the level.
-fn level1_cell(q: vec2<u32>) -> Cell {
-    if (any(q >= level.size)) {
+// Level 1's cell `q` merged from its pixels, or an empty cell past level 1 (`bound`). Never
+// stored (`pull_pixels` and `push_level1` each merge it): on a software adapter its six layers'
+// stores and copy into the atlas cost more than the pixels' reads and the merge.
+fn level1_cell(q: vec2<u32>, bound: vec2<u32>) -> Cell {
+    if (any(q >= bound)) {
         return empty_cell();
     }
     let p = vec2<i32>(2u * q);
     let x = vec2<i32>(1, 0);
     let y = vec2<i32>(0, 1);
-    let m = merge(pixel_cell(p), pixel_cell(p + x), pixel_cell(p + y), pixel_cell(p + x + y));
-    store_cell(0u, level.row, level.size.y, q, m);
-    return m;
+    return merge(pixel_cell(p), pixel_cell(p + x), pixel_cell(p + y), pixel_cell(p + x + y));
 }
 
-// Pull, levels 1 and 2 from the pixels: an invocation per level-2 cell makes its four level-1
-// cells and merges them as `pull` would, so level 1 is not read back for level 2 (a dispatch
-// and 24 texel loads a level-2 cell saved).
+// Pull, level 2 (its `near` level is level 1) from the pixels: a cell's four level-1 cells.
 @compute @workgroup_size(8, 8)
 fn pull_pixels(@builtin(global_invocation_id) id: vec3<u32>) {
-    let q = 2u * id.xy;
-    let c0 = level1_cell(q);
-    let c1 = level1_cell(q + vec2<u32>(1u, 0u));
-    let c2 = level1_cell(q + vec2<u32>(0u, 1u));
-    let c3 = level1_cell(q + vec2<u32>(1u, 1u));
-    if (any(id.xy >= level.near_size)) {
+    if (any(id.xy >= level.size)) {
         return;
     }
-    let first = 3u * level.size.y * level.row;
-    store_cell(first, level.next_row, level.near_size.y, id.xy, merge(c0, c1, c2, c3));
+    let q = 2u * id.xy;
+    let c0 = level1_cell(q, level.near_size);
+    let c1 = level1_cell(q + vec2<u32>(1u, 0u), level.near_size);
+    let c2 = level1_cell(q + vec2<u32>(0u, 1u), level.near_size);
+    let c3 = level1_cell(q + vec2<u32>(1u, 1u), level.near_size);
+    store_cell(id.xy, merge(c0, c1, c2, c3));
 }
 
 // Child `i` (0..3, row-major) of cell `id` one level down (the `near` level), or an empty
@@ -233,7 +224,7 @@ fn pull(@builtin(global_invocation_id) id: vec3<u32>) {
         return;
     }
     let m = merge(child_cell(id.xy, 0u), child_cell(id.xy, 1u), child_cell(id.xy, 2u), child_cell(id.xy, 3u));
-    store_cell(0u, level.row, level.size.y, id.xy, m);
+    store_cell(id.xy, m);
 }
 
 // What a parent lends its children: its plane, depth, sample range, and its centre (pixels).
@@ -261,8 +252,7 @@ fn parent_base(centre: vec2<f32>, l: u32) -> vec4<f32> {
 }
 
 // Running sums of the blend: depth-weighted (b) and plain bilinear (k, the fallback when every
-// parent lies on another surface). Sums rather than arrays of parents: on a CPU adapter a local
-// array of structs spills, and this pass runs per pixel.
+// parent lies on another surface). Sums, not an array of parents (on a CPU adapter it spills).
 struct Blend {
     c: vec3<f32>, tx: vec3<f32>, ty: vec3<f32>, b: f32,
     ck: vec3<f32>, txk: vec3<f32>, tyk: vec3<f32>, lo: f32, hi: f32,
@@ -350,20 +340,17 @@ fn coarse_plane(par: Parents, centre: vec2<f32>, l: u32, key: vec2<f32>) -> Cell
     return blend_end(acc, aim);
 }
 
-// Push and push_pixels run one invocation per 2×2 quads of cells, ids 2·id + (0|1, 0|1).
-// A quad's cells (2·q − 1) + (0|1, 0|1) share their parents (q − 1) + (0|1, 0|1), since a
-// cell's centre lies a quarter of a parent inside its bilinear square, and four quads' parents
-// are 3×3 planes, each read once: 36 texels for 16 cells, where a quad at a time read 64 and
-// a cell at a time 256 (each cell's arithmetic is unchanged). The reads were 15 of the pixel
-// fill's ~40 ms at 1280×720 on lavapipe. Written out: looping over the quads, or sharing the
-// parents through workgroup memory, made the pass slower there.
+// A push invocation does 2×2 quads of cells, ids 2·id + (0|1, 0|1). A quad's cells
+// (2·q − 1) + (0|1, 0|1) share their parents (q − 1) + (0|1, 0|1) (a cell's centre lies a
+// quarter of a parent inside its bilinear square); four quads' parents are 3×3 planes, read
+// once: 36 texels for 16 cells, where a cell at a time read 256 (15 of the fill's ~40 ms at
+// 720p on lavapipe). Looping over the quads or sharing parents in workgroup memory was slower.
 fn quad_origin(q: vec2<u32>) -> vec2<i32> {
     return vec2<i32>(q) * 2 - 1;
 }
 
 struct Block {
-    p00: Plane, p10: Plane, p20: Plane,
-    p01: Plane, p11: Plane, p21: Plane,
+    p00: Plane, p10: Plane, p20: Plane, p01: Plane, p11: Plane, p21: Plane,
     p02: Plane, p12: Plane, p22: Plane,
 }
 
@@ -388,46 +375,62 @@ fn load_block(q: vec2<u32>) -> Block {
 }
 
 // Push at this level (0: the pixels), the four quads from `q`.
-fn push_block(q: vec2<u32>, pixels: bool) {
+fn push_block(q: vec2<u32>, kind: u32) {
     let o = quad_origin(q);
     if (any(o >= vec2<i32>(level.size))) {
         return;
     }
     let k = load_block(q);
-    push_quad(o, Parents(k.p00, k.p10, k.p01, k.p11), pixels);
-    push_quad(o + vec2<i32>(2, 0), Parents(k.p10, k.p20, k.p11, k.p21), pixels);
-    push_quad(o + vec2<i32>(0, 2), Parents(k.p01, k.p11, k.p02, k.p12), pixels);
-    push_quad(o + vec2<i32>(2, 2), Parents(k.p11, k.p21, k.p12, k.p22), pixels);
+    push_quad(o, Parents(k.p00, k.p10, k.p01, k.p11), kind);
+    push_quad(o + vec2<i32>(2, 0), Parents(k.p10, k.p20, k.p11, k.p21), kind);
+    push_quad(o + vec2<i32>(0, 2), Parents(k.p01, k.p11, k.p02, k.p12), kind);
+    push_quad(o + vec2<i32>(2, 2), Parents(k.p11, k.p21, k.p12, k.p22), kind);
 }
 
-fn push_quad(o: vec2<i32>, par: Parents, pixels: bool) {
-    if (pixels) {
+fn push_quad(o: vec2<i32>, par: Parents, kind: u32) {
+    if (kind == PUSH_PIXELS) {
         push_pixel(o, par);
         push_pixel(o + vec2<i32>(1, 0), par);
         push_pixel(o + vec2<i32>(0, 1), par);
         push_pixel(o + vec2<i32>(1, 1), par);
     } else {
-        push_cell(o, par);
-        push_cell(o + vec2<i32>(1, 0), par);
-        push_cell(o + vec2<i32>(0, 1), par);
-        push_cell(o + vec2<i32>(1, 1), par);
+        push_cell(o, par, kind);
+        push_cell(o + vec2<i32>(1, 0), par, kind);
+        push_cell(o + vec2<i32>(0, 1), par, kind);
+        push_cell(o + vec2<i32>(1, 1), par, kind);
     }
 }
 
-// Push, level l ≥ 1 (the top cell too): each cell's plane from its moments and the coarse plane.
+// What a push computes (a constant per entry point): planes from stored moments, level 1's
+// planes from its pixels, or the pixels.
+const PUSH_CELLS: u32 = 0u;
+const PUSH_LEVEL1: u32 = 1u;
+const PUSH_PIXELS: u32 = 2u;
+
+// Push, level l ≥ 2 (the top cell too): each cell's plane from its moments and the coarse plane.
 @compute @workgroup_size(8, 8)
 fn push(@builtin(global_invocation_id) id: vec3<u32>) {
-    push_block(id.xy * 2u, false);
+    push_block(id.xy * 2u, PUSH_CELLS);
 }
 
-fn push_cell(c: vec2<i32>, par: Parents) {
+// Push, level 1: as `push`, its moments from the pixels (level 1 is never stored).
+@compute @workgroup_size(8, 8)
+fn push_level1(@builtin(global_invocation_id) id: vec3<u32>) {
+    push_block(id.xy * 2u, PUSH_LEVEL1);
+}
+
+fn push_cell(c: vec2<i32>, par: Parents, kind: u32) {
     if (any(c < vec2<i32>(0)) || any(c >= vec2<i32>(level.size))) {
         return;
     }
-    let i = level.origin + vec2<u32>(c);
     let side = f32(1u << level.level);
     let centre = (vec2<f32>(c) + 0.5) * side;
-    let cell = load_cell(i);
+    var cell: Cell;
+    if (kind == PUSH_LEVEL1) {
+        cell = level1_cell(vec2<u32>(c), level.size);
+    } else {
+        cell = load_cell(level.origin + vec2<u32>(c));
+    }
     var aim = vec2<f32>(-1.0, 0.0);
     if (cell.w > 0.0) {
         aim = vec2<f32>(cell.depth, cell.material);
@@ -470,7 +473,7 @@ fn push_cell(c: vec2<i32>, par: Parents) {
 // Every pixel without a sample: level 1's planes times its proxy.
 @compute @workgroup_size(8, 8)
 fn push_pixels(@builtin(global_invocation_id) id: vec3<u32>) {
-    push_block(id.xy * 2u, true);
+    push_block(id.xy * 2u, PUSH_PIXELS);
 }
 
 fn push_pixel(p: vec2<i32>, par: Parents) {

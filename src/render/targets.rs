@@ -126,12 +126,16 @@ fn sized_buffers(width: u32, height: u32) -> [(&'static str, u64, wgpu::BufferUs
 /// The pull-push pyramid's atlases, moments and planes for each parity of level.
 fn pyramid(device: &wgpu::Device, r: &mut Resources, width: u32, height: u32) {
     for odd in [false, true] {
-        let (w, h) = pull_push::atlas_size(width, height, odd);
         let sets = [
-            (pull_push::MOMENTS, pull_push::MOMENT_LAYERS),
-            (pull_push::PLANES, pull_push::PLANE_LAYERS),
+            (
+                pull_push::MOMENTS,
+                pull_push::MOMENT_LAYERS,
+                pull_push::moments_hold_first(odd),
+            ),
+            (pull_push::PLANES, pull_push::PLANE_LAYERS, true),
         ];
-        for (names, layers) in sets {
+        for (names, layers, first) in sets {
+            let (w, h) = pull_push::atlas_size(width, height, odd, first);
             let name = names[usize::from(odd)];
             let texture = device.create_texture(&wgpu::TextureDescriptor {
                 label: Some(name),
@@ -150,8 +154,8 @@ fn pyramid(device: &wgpu::Device, r: &mut Resources, width: u32, height: u32) {
             r.texture_array(name, texture);
         }
     }
-    for (name, layers, two) in pull_push::STAGED {
-        let bytes = pull_push::staged_bytes(width, height, layers, two);
+    for (name, layers, level) in pull_push::STAGED {
+        let bytes = pull_push::staged_bytes(width, height, layers, level);
         let staging = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some(name),
             size: bytes,

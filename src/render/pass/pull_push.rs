@@ -31,20 +31,21 @@ pub const PLANE_LAYERS: u32 = 4;
 pub const MOMENTS: [&str; 2] = ["pull_push.moments[even]", "pull_push.moments[odd]"];
 pub const PLANES: [&str; 2] = ["pull_push.planes[even]", "pull_push.planes[odd]"];
 /// Where a dispatch writes its level before the copy into the atlas: layer by layer, row by
-/// row, `Level::row` texels a row. The moments' six layers take two buffers of three, so that
-/// no buffer outgrows `shade.color` (16 bytes a pixel): a software adapter binds at most
-/// 128 MiB of storage, and six layers of level 1 at 3840×2160 are 199 MB.
+/// row, `Level::row` texels a row. Level 1's moments are never stored (`push_level1` merges
+/// them again from the pixels), so the moments' largest staged level is 2 and the planes' 1.
+/// The moments' six layers take two buffers of three (a software adapter binds at most
+/// 128 MiB of storage).
 pub const MOMENTS_STAGED: [&str; 2] =
     ["pull_push.moments_staged[0]", "pull_push.moments_staged[1]"];
 pub const PLANES_STAGED: &str = "pull_push.planes_staged";
 /// Layers in each moments staging buffer.
 const STAGED_MOMENT_LAYERS: u32 = MOMENT_LAYERS / 2;
-/// Every staging buffer with its layers and whether level 2 follows level 1 in it (the
-/// moments: `pull_pixels` writes both levels), as the targets create them.
-pub const STAGED: [(&str, u32, bool); 3] = [
-    (MOMENTS_STAGED[0], STAGED_MOMENT_LAYERS, true),
-    (MOMENTS_STAGED[1], STAGED_MOMENT_LAYERS, true),
-    (PLANES_STAGED, PLANE_LAYERS, false),
+/// Every staging buffer with its layers and the largest level it stages, as the targets
+/// create them.
+pub const STAGED: [(&str, u32, u32); 3] = [
+    (MOMENTS_STAGED[0], STAGED_MOMENT_LAYERS, 2),
+    (MOMENTS_STAGED[1], STAGED_MOMENT_LAYERS, 2),
+    (PLANES_STAGED, PLANE_LAYERS, 1),
 ];
 
 pub const PASS: PassDecl = PassDecl {
@@ -66,7 +67,7 @@ pub const PASS: PassDecl = PassDecl {
         write(MOMENTS_STAGED[1]),
     ],
     attachments: &[],
-    entry_points: &["pull_pixels", "pull", "push", "push_pixels"],
+    entry_points: &["pull_pixels", "pull", "push", "push_level1", "push_pixels"],
 };
 
 /// Twin of `struct Level` in the shader.
@@ -85,8 +86,8 @@ pub struct Level {
     material_tolerance: f32,
     /// Texels a row of the staging buffers holds at this level (copies need 256-byte rows).
     row: u32,
-    /// `pull_pixels` only: the same for level 2, which it writes too (`near_*` is level 2's).
-    next_row: u32,
+    /// The shader's struct is 64 bytes: its size rounds up to its 8-byte alignment.
+    _pad: u32,
 }
 
 /// Levels above the pixels the GPU keeps (at least one, so a 1×1 frame has a top cell).
@@ -94,45 +95,65 @@ pub fn levels(width: u32, height: u32) -> u32 {
     level_count(width, height).max(1)
 }
 
-/// Where level `l` (≥ 1) sits in its parity's atlas: the parity's first level at the corner,
-/// the later (smaller) ones stacked in a column to its right.
+/// The levels after a parity's first (`first`: 1 odd, 2 even), stacked in a column.
+fn column(width: u32, height: u32, first: u32) -> impl Iterator<Item = u32> {
+    (first + 2..=levels(width, height)).step_by(2)
+}
+
+/// The column's width (its first level's) and height.
+fn column_size(width: u32, height: u32, first: u32) -> (u32, u32) {
+    let w = column(width, height, first).next();
+    let h = column(width, height, first).map(|k| level_size(width, height, k).1);
+    (w.map_or(0, |k| level_size(width, height, k).0), h.sum())
+}
+
+/// Where level `l` (≥ 1) sits in its parity's atlas: the later levels stacked in a column at
+/// the left edge, the parity's first level to its right. Moments never hold level 1, so the
+/// odd moments atlas is the column alone.
 fn origin(width: u32, height: u32, l: u32) -> [u32; 2] {
     let first = 2 - l % 2;
     if l == first {
-        return [0, 0];
+        return [column_size(width, height, first).0, 0];
     }
-    let x = level_size(width, height, first).0;
     let y = (first + 2..l)
         .step_by(2)
         .map(|k| level_size(width, height, k).1)
         .sum();
-    [x, y]
+    [0, y]
 }
 
-/// Texel size of the atlas of levels with parity `odd` (1×1 where it holds none).
-pub fn atlas_size(width: u32, height: u32, odd: bool) -> (u32, u32) {
+/// Texel size of the atlas of levels with parity `odd`, with its first level or without
+/// (`first`; moments of level 1 are never kept), 1×1 where it holds none.
+pub fn atlas_size(width: u32, height: u32, odd: bool, first: bool) -> (u32, u32) {
     let top = levels(width, height);
-    let first = if odd { 1 } else { 2 };
-    if first > top {
-        return (1, 1);
-    }
-    let (fw, fh) = level_size(width, height, first);
-    let rest: Vec<u32> = (first + 2..=top).step_by(2).collect();
-    let column_w = rest.first().map_or(0, |&k| level_size(width, height, k).0);
-    let column_h = rest.iter().map(|&k| level_size(width, height, k).1).sum();
-    (fw + column_w, fh.max(column_h))
+    let f = if odd { 1 } else { 2 };
+    let (cw, ch) = column_size(width, height, f);
+    let (w, h) = if first && f <= top {
+        let (fw, fh) = level_size(width, height, f);
+        (cw + fw, fh.max(ch))
+    } else {
+        (cw, ch)
+    };
+    (w.max(1), h.max(1))
+}
+
+/// Whether the moments atlas of this parity holds its first level: level 2 yes, level 1 no.
+pub fn moments_hold_first(odd: bool) -> bool {
+    !odd
 }
 
 /// Bytes of both atlases' moment and plane layers at this frame size.
 pub fn pyramid_bytes(width: u32, height: u32) -> u64 {
-    let texels = |odd| {
-        let (w, h) = atlas_size(width, height, odd);
+    let texels = |odd, first| {
+        let (w, h) = atlas_size(width, height, odd, first);
         u64::from(w) * u64::from(h)
     };
-    (texels(false) + texels(true)) * u64::from(MOMENT_LAYERS + PLANE_LAYERS) * 16
+    let moments = texels(false, moments_hold_first(false)) + texels(true, moments_hold_first(true));
+    let planes = texels(false, true) + texels(true, true);
+    (moments * u64::from(MOMENT_LAYERS) + planes * u64::from(PLANE_LAYERS)) * 16
         + STAGED
             .iter()
-            .map(|&(_, layers, two)| staged_bytes(width, height, layers, two))
+            .map(|&(_, layers, l)| staged_bytes(width, height, layers, l))
             .sum::<u64>()
 }
 
@@ -141,21 +162,10 @@ fn staged_row(w: u32) -> u32 {
     w.next_multiple_of(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT / 16)
 }
 
-/// Texels of level `l`'s layers in a staging buffer of `layers` layers.
-fn staged_texels(width: u32, height: u32, l: u32, layers: u32) -> u64 {
+/// Bytes of a staging buffer of `layers` layers whose largest level is `l`.
+pub fn staged_bytes(width: u32, height: u32, layers: u32, l: u32) -> u64 {
     let (w, h) = level_size(width, height, l);
-    u64::from(staged_row(w)) * u64::from(h.max(1)) * u64::from(layers)
-}
-
-/// Bytes of a staging buffer of `layers` layers: level 1, the largest level staged, and with
-/// `two` level 2 after it (`pull_pixels` writes both levels' moments).
-pub fn staged_bytes(width: u32, height: u32, layers: u32, two: bool) -> u64 {
-    let level2 = if two {
-        staged_texels(width, height, 2, layers)
-    } else {
-        0
-    };
-    (staged_texels(width, height, 1, layers) + level2) * 16
+    u64::from(staged_row(w)) * u64::from(h.max(1)) * u64::from(layers) * 16
 }
 
 /// Bytes of the level uniforms: one slot per dispatch.
@@ -163,8 +173,8 @@ pub fn levels_bytes(width: u32, height: u32) -> u64 {
     SLOT * (2 * u64::from(levels(width, height)) + 1)
 }
 
-/// One slot per dispatch: pull_pixels (levels 1 and 2), pull per level from 3, push per level
-/// from the top, push_pixels (as level 0).
+/// One slot per dispatch: pull_pixels (level 2, from the pixels), pull per level from 3, push
+/// per level from the top (level 1: push_level1), push_pixels (as level 0).
 fn slots(width: u32, height: u32) -> Vec<(&'static str, Level)> {
     let top = levels(width, height);
     let base = |l: u32, ridge: f32| Level {
@@ -186,12 +196,12 @@ fn slots(width: u32, height: u32) -> Vec<(&'static str, Level)> {
         s.near_size = level_size(width, height, l).into();
         s.near_origin = origin(width, height, l);
     };
-    let mut first = base(1, 0.0);
+    let mut out = Vec::new();
     if top >= 2 {
-        near(&mut first, 2);
-        first.next_row = staged_row(first.near_size[0]);
+        let mut first = base(2, 0.0);
+        near(&mut first, 1);
+        out.push(("pull_pixels", first));
     }
-    let mut out = vec![("pull_pixels", first)];
     for l in 3..=top {
         let mut s = base(l, 0.0);
         near(&mut s, l - 1);
@@ -203,7 +213,12 @@ fn slots(width: u32, height: u32) -> Vec<(&'static str, Level)> {
             near(&mut s, l + 1);
             s.has_parent = 1;
         }
-        out.push((if l == 0 { "push_pixels" } else { "push" }, s));
+        let entry = match l {
+            0 => "push_pixels",
+            1 => "push_level1",
+            _ => "push",
+        };
+        out.push((entry, s));
     }
     out
 }
@@ -221,14 +236,11 @@ fn route(f: &mut Recorder, l: u32, pulling: bool) {
     f.route("pull_push.planes_in", PLANES[other]);
 }
 
-/// Invocations a dispatch needs per axis: one per cell pulling, one per level-2 cell (2×2
-/// level-1 cells) pulling from the pixels; pushing, one per 2×2 quads of cells (quads start
-/// at odd cells, so a side of n has n/2 + 1 of them).
+/// Invocations a dispatch needs per axis: one per cell pulling; pushing, one per 2×2 quads
+/// of cells (quads start at odd cells, so a side of n has n/2 + 1 of them).
 fn dispatch_cells(entry: &str, size: [u32; 2]) -> [u32; 2] {
     if entry.starts_with("push") {
         size.map(|n| (n / 2 + 1).div_ceil(2))
-    } else if entry == "pull_pixels" {
-        size.map(|n| n.div_ceil(2))
     } else {
         size
     }
@@ -276,59 +288,27 @@ pub fn record(f: &mut Recorder) -> Result<(), GraphError> {
     Ok(())
 }
 
-/// Where a level sits in a staging buffer and in its atlas.
-struct Region {
-    size: [u32; 2],
-    origin: [u32; 2],
-    /// Texels a staging row holds.
-    row: u32,
-    /// Bytes before the level's first layer in the staging buffer.
-    offset: u64,
-}
-
-/// Copies the level(s) a dispatch wrote from its staging buffers into their atlases:
-/// `pull_pixels` wrote level 2 (its `near_*`) after level 1's layers.
+/// Copies the level a dispatch wrote from its staging buffers into its atlas.
 fn stage(f: &mut Recorder, pulling: bool, s: &Level) -> Result<(), GraphError> {
-    let own = Region {
-        size: s.size,
-        origin: s.origin,
-        row: s.row,
-        offset: 0,
-    };
+    let atlas = |kind: [&'static str; 2]| kind[(s.level % 2) as usize];
     if !pulling {
-        let atlas = PLANES[(s.level % 2) as usize];
-        return copy(f, PLANES_STAGED, atlas, 0, PLANE_LAYERS, &own);
+        return copy(f, PLANES_STAGED, atlas(PLANES), 0, PLANE_LAYERS, s);
     }
-    let mut regions = vec![(s.level, own)];
-    if s.level == 1 && s.near_size[0] > 0 {
-        let (width, height) = f.size;
-        let level2 = Region {
-            size: s.near_size,
-            origin: s.near_origin,
-            row: s.next_row,
-            // Level 1's layers, as `staged_bytes` sized them.
-            offset: staged_texels(width, height, 1, STAGED_MOMENT_LAYERS) * 16,
-        };
-        regions.push((2, level2));
-    }
-    for (l, r) in &regions {
-        let atlas = MOMENTS[(l % 2) as usize];
-        for (i, staged) in MOMENTS_STAGED.into_iter().enumerate() {
-            let first = i as u32 * STAGED_MOMENT_LAYERS;
-            copy(f, staged, atlas, first, STAGED_MOMENT_LAYERS, r)?;
-        }
+    for (i, staged) in MOMENTS_STAGED.into_iter().enumerate() {
+        let first = i as u32 * STAGED_MOMENT_LAYERS;
+        copy(f, staged, atlas(MOMENTS), first, STAGED_MOMENT_LAYERS, s)?;
     }
     Ok(())
 }
 
-/// Copies `layers` layers of the level at `r` from `staged` into `atlas`, from layer `first` on.
+/// Copies `layers` layers of level `r` from `staged` into `atlas`, from layer `first` on.
 fn copy(
     f: &mut Recorder,
     staged: &'static str,
     atlas: &'static str,
     first: u32,
     layers: u32,
-    r: &Region,
+    r: &Level,
 ) -> Result<(), GraphError> {
     let missing = |name| GraphError::Missing {
         pass: PASS.label,
@@ -340,7 +320,7 @@ fn copy(
         wgpu::TexelCopyBufferInfo {
             buffer,
             layout: wgpu::TexelCopyBufferLayout {
-                offset: r.offset,
+                offset: 0,
                 bytes_per_row: Some(r.row * 16),
                 rows_per_image: Some(r.size[1]),
             },
@@ -362,4 +342,56 @@ fn copy(
         },
     );
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Every level lies inside its atlases and apart from the other levels of its parity, and
+    /// the moments atlases hold every level but 1 (which is never stored), at odd, tiny and
+    /// the largest sizes a session may ask for.
+    #[test]
+    fn levels_tile_their_atlases() {
+        for (w, h) in [
+            (1, 1),
+            (3, 2),
+            (97, 61),
+            (641, 479),
+            (1280, 720),
+            (3840, 2160),
+        ] {
+            let top = levels(w, h);
+            for odd in [false, true] {
+                let own: Vec<u32> = (1..=top).filter(|l| (l % 2 == 1) == odd).collect();
+                let rect = |l: u32| {
+                    let ([x, y], (lw, lh)) = (origin(w, h, l), level_size(w, h, l));
+                    (x, y, x + lw, y + lh)
+                };
+                for &l in &own {
+                    let (x0, y0, x1, y1) = rect(l);
+                    let (pw, ph) = atlas_size(w, h, odd, true);
+                    assert!(x1 <= pw && y1 <= ph, "{w}x{h} level {l} outside the planes");
+                    if l >= 2 {
+                        let (mw, mh) = atlas_size(w, h, odd, moments_hold_first(odd));
+                        assert!(
+                            x1 <= mw && y1 <= mh,
+                            "{w}x{h} level {l} outside the moments"
+                        );
+                    }
+                    for &k in own.iter().filter(|&&k| k != l) {
+                        let (a0, b0, a1, b1) = rect(k);
+                        let apart = x1 <= a0 || a1 <= x0 || y1 <= b0 || b1 <= y0;
+                        assert!(apart, "{w}x{h}: levels {l} and {k} overlap");
+                    }
+                }
+            }
+            // Level 1's moments are not kept: the odd moments atlas is smaller than its planes'.
+            if top >= 3 {
+                let (mw, mh) = atlas_size(w, h, true, moments_hold_first(true));
+                let (pw, ph) = atlas_size(w, h, true, true);
+                assert!(u64::from(mw) * u64::from(mh) < u64::from(pw) * u64::from(ph) / 4);
+            }
+        }
+    }
 }
