@@ -1,11 +1,14 @@
 // Compaction (the thesis's CSR reordering, as stream compaction): the sampled pixels become one
 // dense list, so the shading dispatch runs exactly as many invocations as there are samples.
 // Each 8×8 tile reserves its slots with one global atomic, so list order keeps tiles together.
+// A frame in parts lists each band of rows (shade_rows) just before shading it, after the bands
+// before it; a whole frame is one band.
 
 @group(0) @binding(1) var<storage, read> flags: array<u32>;
 @group(0) @binding(2) var<storage, read_write> list: array<u32>;
-// [0]: sampled count; [1..4]: indirect dispatch arguments for the shading pass.
-@group(0) @binding(3) var<storage, read_write> counter: array<atomic<u32>, 4>;
+// [0]: samples listed so far (the frame's count once every band is listed); [1..4]: indirect
+// dispatch arguments for shading the last band's samples; [4]: where they start in the list.
+@group(0) @binding(3) var<storage, read_write> counter: array<atomic<u32>, 8>;
 
 var<workgroup> tile_count: atomic<u32>;
 var<workgroup> tile_base: u32;
@@ -16,9 +19,10 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>, @builtin(local_invocation_
         atomicStore(&tile_count, 0u);
     }
     workgroupBarrier();
-    let p = vec2<i32>(id.xy);
+    let p = vec2<i32>(id.xy + vec2<u32>(0u, frame.shade_rows.x));
     var slot = 0xFFFFFFFFu;
-    if (in_frame(p) && (flags[index_of(p)] & FLAG_SAMPLED) != 0u) {
+    let listed = in_frame(p) && u32(p.y) < frame.shade_rows.y;
+    if (listed && (flags[index_of(p)] & FLAG_SAMPLED) != 0u) {
         slot = atomicAdd(&tile_count, 1u);
     }
     workgroupBarrier();
@@ -31,10 +35,16 @@ fn main(@builtin(global_invocation_id) id: vec3<u32>, @builtin(local_invocation_
     }
 }
 
-// One invocation after `main`: turns the count into workgroups of 64 for the list dispatch.
+// One invocation before `main`: the band's samples start where the list ends.
+@compute @workgroup_size(1)
+fn band_start() {
+    atomicStore(&counter[4], atomicLoad(&counter[0]));
+}
+
+// One invocation after `main`: turns the band's count into workgroups of 64 for the list dispatch.
 @compute @workgroup_size(1)
 fn indirect_args() {
-    let n = atomicLoad(&counter[0]);
+    let n = atomicLoad(&counter[0]) - atomicLoad(&counter[4]);
     atomicStore(&counter[1], (n + 63u) / 64u);
     atomicStore(&counter[2], 1u);
     atomicStore(&counter[3], 1u);

@@ -20,7 +20,8 @@
 @group(0) @binding(2) var albedo_tex: texture_2d<f32>;
 @group(0) @binding(3) var<storage, read> flags: array<u32>;
 @group(0) @binding(4) var<storage, read> list: array<u32>;
-@group(0) @binding(5) var<storage, read> counter: array<u32, 4>;
+// compact.wgsl's: [0] the samples listed, [4] where the band being shaded starts.
+@group(0) @binding(5) var<storage, read> counter: array<u32, 8>;
 @group(0) @binding(6) var<storage, read_write> out_color: array<vec4<f32>>;
 @group(0) @binding(7) var<storage, read> materials: array<Material>;
 @group(0) @binding(8) var blurred_normal_tex: texture_2d<f32>;
@@ -410,10 +411,11 @@ fn shade(p: vec2<i32>) {
 
 @compute @workgroup_size(64)
 fn shade_list(@builtin(global_invocation_id) id: vec3<u32>) {
-    if (id.x >= counter[0]) {
+    let start = counter[4];
+    if (id.x >= counter[0] - start) {
         return;
     }
-    shade(unpack_seed(list[id.x]));
+    shade(unpack_seed(list[start + id.x]));
 }
 
 @compute @workgroup_size(8, 8)

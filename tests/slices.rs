@@ -1,8 +1,8 @@
 //! A frame split into parts (shading in bands of rows, other frames in between) gives the same
-//! pixels as the frame rendered whole.
+//! pixels as the frame rendered whole, foveated frames too.
 
 use fovea::render::{FrameRequest, Progress, Renderer};
-use fovea::settings::{Preset, RenderSettings};
+use fovea::settings::{Preset, Reconstruction, RenderSettings};
 
 fn request(preset: Preset, stream: u64) -> FrameRequest {
     FrameRequest {
@@ -29,23 +29,28 @@ fn max_diff(a: &[u8], b: &[u8]) -> u8 {
 #[test]
 fn a_sliced_frame_with_others_between_its_parts_equals_the_whole_frame() {
     let mut r = renderer();
-    // (preset, coarse gather): a band's lattice rows overlap its neighbours', each gathers its own.
-    for (preset, coarse) in [
-        (Preset::Full, false),
-        (Preset::Reference, false),
-        (Preset::Full, true),
+    // (preset, coarse gather, JFA + Sibson): a band's lattice rows overlap its neighbours', each
+    // gathers its own. Foveated: the list of samples shaded band by band, then reconstructed.
+    for (preset, coarse, sibson) in [
+        (Preset::Full, false, false),
+        (Preset::Reference, false, false),
+        (Preset::Full, true, false),
+        (Preset::Balanced, false, false),
+        (Preset::Quality, false, false),
+        (Preset::Balanced, false, true),
     ] {
         let req = |stream| {
             let mut q = request(preset, stream);
             q.settings.translucency.coarse_gather = coarse;
+            if sibson {
+                q.settings.foveation.reconstruction = Reconstruction::Sibson;
+            }
             q
         };
         let whole = r.render(&req(1)).unwrap();
         let mut going = match r.begin(&req(2), 5).unwrap() {
             Progress::Going(g) => g,
-            Progress::Done(_) => {
-                panic!("{preset}: a full-shading frame asked for 5 slices is sliced")
-            }
+            Progress::Done(_) => panic!("{preset}: a frame asked for 5 slices is sliced"),
         };
         let mut parts = 1;
         let sliced = loop {
@@ -57,19 +62,37 @@ fn a_sliced_frame_with_others_between_its_parts_equals_the_whole_frame() {
                 break f;
             }
         };
-        // Prefix, five bands, suffix.
-        assert_eq!(parts, 7, "{preset}");
+        // Prefix, five bands, suffix; foveated, the sampling and the reconstruction too (pull-push
+        // in two parts, JFA + Sibson in one).
+        let foveated = preset == Preset::Balanced || preset == Preset::Quality;
+        let expected = match (foveated, sibson) {
+            (false, _) => 7,
+            (true, false) => 10,
+            (true, true) => 9,
+        };
+        assert_eq!(parts, expected, "{preset} sibson {sibson}");
         let d = max_diff(&whole.rgba, &sliced.rgba);
         assert!(d <= 1, "{preset}: sliced differs from whole by {d}");
+        if foveated {
+            // The same samples and the same reconstruction: to the byte.
+            assert!(
+                whole.sampled < 0.5 && whole.sampled == sliced.sampled,
+                "{preset}"
+            );
+            assert_eq!(
+                d, 0,
+                "{preset}: a foveated frame in parts differs from it whole"
+            );
+        }
         assert!(sliced.render_ms > 0.0);
     }
 }
 
 #[test]
-fn foveated_frames_stay_whole_and_abandoned_frames_free_their_targets() {
+fn single_slice_frames_stay_whole_and_abandoned_frames_free_their_targets() {
     let mut r = renderer();
     assert!(matches!(
-        r.begin(&request(Preset::Balanced, 1), 8).unwrap(),
+        r.begin(&request(Preset::Balanced, 1), 1).unwrap(),
         Progress::Done(_)
     ));
     let going = match r.begin(&request(Preset::Full, 2), 4).unwrap() {

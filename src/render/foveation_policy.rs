@@ -19,13 +19,6 @@ use super::request::FrameRequest;
 /// Frames of a stream between probes of the choice not taken.
 pub const PROBE_EVERY: u64 = 64;
 
-/// The longest a foveated frame may be expected to hold the renderer while other streams share
-/// it. A foveated frame is one piece (slicing splits only whole-frame shading, `scheduler.rs`),
-/// so a longer one is shaded whole, in parts of ~100 ms, and the others' frames run between
-/// them: a 3840×2160 `balanced` frame (~2.6 s on lavapipe) held another session's 50 ms frames
-/// for 2.8 s.
-pub const MAX_UNSLICED_MS: f64 = 1000.0;
-
 /// What foveating must save for a stream shading whole to foveate again: more than the 5% that
 /// keeps it foveating, so estimates hovering at the threshold do not flip the periphery's look
 /// every frame (they did at 160×120 on `gallery`, where the two cost within 10%).
@@ -47,27 +40,11 @@ pub struct FoveationPolicy {
 }
 
 impl FoveationPolicy {
-    /// Turns foveation off in `req` where it does not pay (or to measure it), or where the
-    /// renderer is `shared` and the frame would hold it longer than [`MAX_UNSLICED_MS`];
-    /// returns why, for the frame's header. Requests without foveation are left alone.
-    pub fn apply(
-        &mut self,
-        cost: &CostModel,
-        req: &mut FrameRequest,
-        shared: bool,
-    ) -> Option<String> {
+    /// Turns foveation off in `req` where it does not pay (or to measure it); returns why,
+    /// for the frame's header. Requests without foveation are left alone.
+    pub fn apply(&mut self, cost: &CostModel, req: &mut FrameRequest) -> Option<String> {
         if !req.settings.foveation.enabled {
             return None;
-        }
-        if let Some(ms) = cost
-            .estimate_ms(req)
-            .filter(|ms| shared && *ms > MAX_UNSLICED_MS)
-        {
-            req.settings.foveation.enabled = false;
-            return Some(format!(
-                "shaded whole, in parts: a foveated frame (~{ms:.0} ms) is one piece and would \
-                 hold the other sessions' frames"
-            ));
         }
         let s = self.streams.entry(req.stream).or_default();
         s.frames += 1;
@@ -131,7 +108,7 @@ mod tests {
         (1..=n)
             .filter(|_| {
                 let mut r = req(Preset::Balanced, stream);
-                let why = p.apply(cost, &mut r, false);
+                let why = p.apply(cost, &mut r);
                 assert_eq!(why.is_some(), !r.settings.foveation.enabled);
                 why.is_some()
             })
@@ -143,12 +120,12 @@ mod tests {
         let cost = CostModel::default();
         let mut p = FoveationPolicy::default();
         let mut full = req(Preset::Full, 1);
-        assert_eq!(p.apply(&cost, &mut full, false), None);
+        assert_eq!(p.apply(&cost, &mut full), None);
         assert_eq!(full.settings, RenderSettings::of(Preset::Full));
         let mut whole = Vec::new();
         for i in 1..=3 * PROBE_EVERY {
             let mut r = req(Preset::Balanced, 1);
-            if let Some(why) = p.apply(&cost, &mut r, false) {
+            if let Some(why) = p.apply(&cost, &mut r) {
                 assert!(why.contains("measure"), "{why}");
                 assert!(!r.settings.foveation.enabled);
                 whole.push(i);
@@ -158,7 +135,7 @@ mod tests {
         // A stream that ends and comes back starts counting again.
         p.forget(1);
         let mut r = req(Preset::Balanced, 1);
-        assert_eq!(p.apply(&cost, &mut r, false), None);
+        assert_eq!(p.apply(&cost, &mut r), None);
     }
 
     #[test]
@@ -179,7 +156,7 @@ mod tests {
         let foveated: Vec<u64> = (1..=n).filter(|i| !whole.contains(i)).collect();
         assert_eq!(foveated, [PROBE_EVERY, 2 * PROBE_EVERY]);
         let mut r = req(Preset::Balanced, 3);
-        let why = p.apply(&cheap, &mut r, false).unwrap();
+        let why = p.apply(&cheap, &mut r).unwrap();
         assert_eq!(
             why,
             "shaded whole: foveation does not pay here (foveated ~60 ms, shaded whole ~40 ms)"
@@ -189,34 +166,6 @@ mod tests {
             cheap.record(&req(Preset::Balanced, 2), 10.0);
         }
         assert!(whole_frames(&mut p, &cheap, 2, PROBE_EVERY).is_empty());
-    }
-
-    #[test]
-    fn a_long_foveated_frame_is_shaded_whole_only_while_others_share_the_renderer() {
-        let cost = CostModel::default();
-        cost.record(&req(Preset::Balanced, 1), 2.0 * MAX_UNSLICED_MS);
-        cost.record(&req(Preset::Full, 1), 4.0 * MAX_UNSLICED_MS);
-        let mut p = FoveationPolicy::default();
-        // Alone, the frame pays and holds no one: foveated.
-        let mut r = req(Preset::Balanced, 1);
-        assert_eq!(p.apply(&cost, &mut r, false), None);
-        assert!(r.settings.foveation.enabled);
-        // Shared, it is shaded whole (in parts), however much foveating saves.
-        let mut r = req(Preset::Balanced, 1);
-        let why = p.apply(&cost, &mut r, true).unwrap();
-        assert!(
-            !r.settings.foveation.enabled && why.contains("in parts"),
-            "{why}"
-        );
-        // A short foveated frame is not held back by sharing.
-        let short = CostModel::default();
-        short.record(&req(Preset::Balanced, 1), MAX_UNSLICED_MS / 2.0);
-        short.record(&req(Preset::Full, 1), MAX_UNSLICED_MS);
-        let mut r = req(Preset::Balanced, 2);
-        assert_eq!(p.apply(&short, &mut r, true), None);
-        // Frames shaded whole are left alone.
-        let mut r = req(Preset::Full, 3);
-        assert_eq!(p.apply(&cost, &mut r, true), None);
     }
 
     #[test]
@@ -256,7 +205,7 @@ mod tests {
         let whole: Vec<bool> = (0..n)
             .map(|i| {
                 let mut r = req(Preset::Balanced, 1);
-                p.apply(if i % 2 == 0 { &dear } else { &cheap }, &mut r, false)
+                p.apply(if i % 2 == 0 { &dear } else { &cheap }, &mut r)
                     .is_some()
             })
             .collect();

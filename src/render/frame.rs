@@ -93,32 +93,24 @@ pub fn coarse_gather(s: &RenderSettings, needs_dipole: bool) -> bool {
 pub fn record(f: &mut Recorder, plan: &FramePlan, mesh: &MeshBuffers) -> Result<(), GraphError> {
     record_prefix(f, plan, mesh)?;
     if plan.foveated {
-        sampling::record(f)?;
-        // The list also counts the samples (the header's `sampled`), so it is built even when
-        // shading masks a full-frame dispatch instead of using it.
-        compact::record(f)?;
-        if plan.compaction {
-            shade::record_list(f)?;
-        } else {
-            shade::record_grid(f, false)?;
-        }
-        // Before reconstruction: pull-push fills `shade.color` in place.
-        keep_color_history(f)?;
-        if plan.pull_push {
-            pull_push::record(f)?;
-        } else {
-            jfa::record(f, &plan.jfa_steps)?;
-            resolve::record(f)?;
-        }
+        record_sampling(f)?;
+        compact::record_rows(f, 0, f.size.1)?;
+    }
+    if plan.foveated && plan.compaction {
+        shade::record_list(f)?;
     } else {
         shade::record_grid(f, plan.coarse_gather)?;
+    }
+    if plan.foveated {
+        record_reconstruction(f, plan, None)?;
     }
     record_suffix(f, plan)
 }
 
 /// What comes before shading: the G-buffer and, on the screen rung, its diffusion. A sliced
-/// frame (full shading only) records this, then `shade::record_rows` per slice, then
-/// [`record_suffix`], each in its own submission.
+/// frame records this, then (foveated) [`record_sampling`], [`record_rows`] per slice, then
+/// (foveated) [`record_reconstruction`] in parts, then [`record_suffix`], each in its own
+/// submission.
 pub fn record_prefix(
     f: &mut Recorder,
     plan: &FramePlan,
@@ -132,8 +124,60 @@ pub fn record_prefix(
     Ok(())
 }
 
-/// What comes after shading: depth of field, the output image (low-passed and converted to
-/// I420 when asked), and the next frame's history (its colour already, when foveated).
+/// Foveated: the sampling map, and an empty list for the bands' samples.
+pub fn record_sampling(f: &mut Recorder) -> Result<(), GraphError> {
+    sampling::record(f)?;
+    compact::clear(f)
+}
+
+/// Parts a sliced frame's pull-push reconstruction is split into (`pull_push::record`).
+pub const RECONSTRUCTION_PARTS: u32 = pull_push::PARTS;
+
+/// Foveated, after shading: the next frame's colour history (the samples alone), then the
+/// reconstruction, whole (`None`) or part `k` of [`RECONSTRUCTION_PARTS`] (JFA and resolve
+/// are one part).
+pub fn record_reconstruction(
+    f: &mut Recorder,
+    plan: &FramePlan,
+    part: Option<u32>,
+) -> Result<(), GraphError> {
+    if part.unwrap_or(0) == 0 {
+        // Before reconstruction: pull-push fills `shade.color` in place.
+        keep_color_history(f)?;
+    }
+    if plan.pull_push {
+        pull_push::record(f, part)
+    } else if part.unwrap_or(0) == 0 {
+        jfa::record(f, &plan.jfa_steps)?;
+        resolve::record(f)
+    } else {
+        Ok(())
+    }
+}
+
+/// The shading of rows `[first, end)`, one slice of a sliced frame (the frame uniform's
+/// `shade_rows` holds the same rows): when foveated, those rows' samples listed and shaded,
+/// else every pixel of them. The list also counts the samples (the header's `sampled`), so it
+/// is built even when shading masks a full-frame dispatch instead of using it.
+pub fn record_rows(
+    f: &mut Recorder,
+    plan: &FramePlan,
+    first: u32,
+    end: u32,
+) -> Result<(), GraphError> {
+    if plan.foveated {
+        compact::record_rows(f, first, end)?;
+    }
+    if plan.foveated && plan.compaction {
+        shade::record_list(f)
+    } else {
+        shade::record_rows(f, first, end, plan.coarse_gather)
+    }
+}
+
+/// What comes last (after a foveated frame's reconstruction): depth of field, the output
+/// image (low-passed and converted to I420 when asked), and the next frame's history (its
+/// colour already, when foveated).
 pub fn record_suffix(f: &mut Recorder, plan: &FramePlan) -> Result<(), GraphError> {
     if plan.dof {
         dof::record(f)?;

@@ -94,8 +94,7 @@ impl Scheduler {
             Job::Render { mut request, reply } => {
                 self.arrivals += 1;
                 self.turns.arrive(request.stream);
-                let shared = self.turns.streams() > 1;
-                let unfoveated = self.foveation.apply(&self.cost, &mut request, shared);
+                let unfoveated = self.foveation.apply(&self.cost, &mut request);
                 self.tasks.push(Task {
                     request,
                     reply,
@@ -161,9 +160,12 @@ impl Scheduler {
         self.turns.pick(&keys).map(|k| eligible[k])
     }
 
-    /// How many parts `request` is split into: enough that each is about `SLICE_MS`.
+    /// How many parts `request` is split into: enough that each is about `SLICE_MS`. A
+    /// foveated frame is split only while other streams share the renderer: its parts cannot
+    /// be shorter than its fixed passes (G-buffer and sampling, reconstruction), and alone the
+    /// parts would only add submissions.
     fn slices(&self, request: &FrameRequest) -> u32 {
-        if request.settings.foveation.enabled {
+        if request.settings.foveation.enabled && self.turns.streams() <= 1 {
             return 1;
         }
         match self.cost.estimate_ms(request) {

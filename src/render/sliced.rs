@@ -1,8 +1,9 @@
-//! Frames in parts. A frame that shades every pixel with costly shading (the reference rung at
-//! 4K runs for many seconds on a software adapter) is split into submissions: the passes before
-//! shading, the shading in bands of rows, and the passes after it. The render thread runs other
-//! sessions' frames between the parts, so one heavy frame delays them by at most one part.
-//! Foveated frames shade a compacted list (cost ∝ samples) and stay whole.
+//! Frames in parts. A long frame (the reference rung at 4K runs for many seconds on a software
+//! adapter, a foveated 4K frame for seconds) is split into submissions: the passes before
+//! shading; when foveated, the sampling map; the shading in bands of rows (foveated: each
+//! band's samples listed, then shaded); when foveated, the reconstruction in parts; and the
+//! passes after it. The render thread runs other sessions' frames between the parts, so one
+//! heavy frame delays them by at most one part.
 //!
 //! What a frame in flight owns lives in its stream's targets (pinned until it ends); what it
 //! shares with other frames of its scene (shadow map, photon pyramid) must not be rebuilt for
@@ -17,7 +18,6 @@ use super::frame::{self, FramePlan};
 use super::frame_uniform::frame_uniform;
 use super::graph::Recorder;
 use super::pass::photons::PhotonInputs;
-use super::pass::shade;
 use super::renderer::{not_loaded, Renderer, TargetKey};
 use super::request::{FrameRequest, GpuLowPass, Readback, RenderedFrame, MAX_SIDE};
 use super::uniforms::FrameUniform;
@@ -33,8 +33,8 @@ pub enum Progress {
 pub struct FrameInFlight {
     req: FrameRequest,
     key: TargetKey,
-    /// The bands of rows still to shade, next first.
-    bands: Vec<(u32, u32)>,
+    /// The parts still to run, next first.
+    parts: Vec<Part>,
     to_light: Vec3,
     render_ms: f64,
     passes_ms: BTreeMap<String, f64>,
@@ -47,12 +47,37 @@ impl FrameInFlight {
 }
 
 /// One submission of a frame.
-#[derive(Clone, Copy)]
+#[derive(Clone, Copy, Debug, PartialEq)]
 enum Part {
     Whole,
     Prefix,
+    /// Foveated: the sampling map (and an empty list).
+    Sampling,
     Rows(u32, u32),
+    /// Foveated: the reconstruction, whole (`None`) or one of `frame::RECONSTRUCTION_PARTS`.
+    Reconstruction(Option<u32>),
     Suffix,
+}
+
+/// The parts after the prefix of a frame shaded in `bands`: each of the longest fixed passes
+/// of a foveated frame (at 3840×2160 on a software adapter the G-buffer, sampling and
+/// reconstruction run 0.2–0.6 s each) is a part of its own.
+fn later_parts(plan: &FramePlan, bands: Vec<(u32, u32)>) -> Vec<Part> {
+    let mut parts = Vec::new();
+    if plan.foveated {
+        parts.push(Part::Sampling);
+    }
+    parts.extend(bands.into_iter().map(|(a, b)| Part::Rows(a, b)));
+    if plan.foveated {
+        let n = if plan.pull_push {
+            frame::RECONSTRUCTION_PARTS
+        } else {
+            1
+        };
+        parts.extend((0..n).map(|i| Part::Reconstruction(Some(i))));
+    }
+    parts.push(Part::Suffix);
+    parts
 }
 
 /// Splits `height` rows into `slices` bands of whole 8-row workgroups.
@@ -70,8 +95,8 @@ pub fn bands(height: u32, slices: u32) -> Vec<(u32, u32)> {
 }
 
 impl Renderer {
-    /// Starts a frame: whole when `slices` is 1 or the frame is foveated, else the passes before
-    /// shading, leaving `slices` bands of shading and the rest to [`Renderer::step`].
+    /// Starts a frame: whole when `slices` is 1, else the passes before shading, leaving
+    /// `slices` bands of shading and the rest to [`Renderer::step`].
     pub fn begin(&mut self, req: &FrameRequest, slices: u32) -> Result<Progress, RenderError> {
         let (w, h) = (req.width, req.height);
         if w == 0 || h == 0 || w > MAX_SIDE || h > MAX_SIDE {
@@ -88,7 +113,7 @@ impl Renderer {
         self.timer.begin_frame();
         let (photon_encoder, inputs) = self.prepare_scene(req, ti)?;
         self.write_uniform(req, ti, inputs)?;
-        let sliced = slices > 1 && !req.settings.foveation.enabled;
+        let sliced = slices > 1;
         let part = if sliced { Part::Prefix } else { Part::Whole };
         let submission = self.submit(req, ti, part, photon_encoder)?;
         let render_ms = started.elapsed().as_secs_f64() * 1e3;
@@ -96,7 +121,12 @@ impl Renderer {
         let mut going = FrameInFlight {
             req: req.clone(),
             key: key.clone(),
-            bands: if sliced { bands(h, slices) } else { Vec::new() },
+            parts: if sliced {
+                let plan = FramePlan::of(&req.settings, w, h, self.targets[ti].1.needs_dipole);
+                later_parts(&plan, bands(h, slices))
+            } else {
+                Vec::new()
+            },
             to_light: inputs.to_light,
             render_ms,
             passes_ms,
@@ -118,12 +148,10 @@ impl Renderer {
         };
         let started = Instant::now();
         self.timer.begin_frame();
-        let part = match f.bands.first().copied() {
-            Some((a, b)) => {
-                f.bands.remove(0);
-                Part::Rows(a, b)
-            }
-            None => Part::Suffix,
+        let part = if f.parts.is_empty() {
+            Part::Suffix
+        } else {
+            f.parts.remove(0)
         };
         let submission = self.submit(&f.req, ti, part, None)?;
         for (pass, ms) in self.timer.read(&self.gpu.device, submission)? {
@@ -229,7 +257,7 @@ impl Renderer {
             // Later parts read the ports the first part set (`frame.color`).
             routes: match part {
                 Part::Whole | Part::Prefix => Default::default(),
-                Part::Rows(..) | Part::Suffix => t.routes.clone(),
+                _ => t.routes.clone(),
             },
             timer: &mut self.timer,
             size: (req.width, req.height),
@@ -238,7 +266,9 @@ impl Renderer {
         match part {
             Part::Whole => frame::record(&mut recorder, &plan, &sg.mesh)?,
             Part::Prefix => frame::record_prefix(&mut recorder, &plan, &sg.mesh)?,
-            Part::Rows(a, b) => shade::record_rows(&mut recorder, a, b, plan.coarse_gather)?,
+            Part::Sampling => frame::record_sampling(&mut recorder)?,
+            Part::Rows(a, b) => frame::record_rows(&mut recorder, &plan, a, b)?,
+            Part::Reconstruction(k) => frame::record_reconstruction(&mut recorder, &plan, k)?,
             Part::Suffix => frame::record_suffix(&mut recorder, &plan)?,
         }
         t.routes = recorder.routes;

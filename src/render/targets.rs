@@ -82,10 +82,10 @@ fn textures() -> [(&'static str, wgpu::TextureFormat, wgpu::TextureUsages); 8] {
 fn sized_buffers(width: u32, height: u32) -> [(&'static str, u64, wgpu::BufferUsages); 8] {
     let uniform = B::UNIFORM | B::COPY_DST;
     [
-        // `[count, workgroups x, y, z]` for the indirect shading dispatch.
+        // `[count, workgroups x, y, z, band start, 0, 0, 0]`: compact.wgsl.
         (
             "compact.counter",
-            16,
+            32,
             B::STORAGE | B::INDIRECT | B::COPY_SRC | B::COPY_DST,
         ),
         (

@@ -1,5 +1,6 @@
 //! Compaction pass: the sampled pixels become one dense list (stream compaction, the thesis's
-//! CSR reordering), and the count becomes the indirect dispatch of the shading pass.
+//! CSR reordering), and the count becomes the indirect dispatch of the shading pass. A frame in
+//! parts lists each band of rows before shading it, so each band shades only its own samples.
 
 use crate::render::graph::{read, uniform, write, DispatchSize, GraphError, PassDecl, Recorder};
 
@@ -14,15 +15,24 @@ pub const PASS: PassDecl = PassDecl {
         write("compact.counter"),
     ],
     attachments: &[],
-    entry_points: &["main", "indirect_args"],
+    entry_points: &["band_start", "main", "indirect_args"],
 };
 
-/// Zeroes the counter, appends every sampled pixel, then turns the count into workgroups.
-pub fn record(f: &mut Recorder) -> Result<(), GraphError> {
+/// Empties the list: before the frame's first band.
+pub fn clear(f: &mut Recorder) -> Result<(), GraphError> {
     let counter = f.buffer("compact.counter")?.clone();
     f.encoder.clear_buffer(&counter, 0, None);
-    let list = f.frame_dispatch(&PASS, "main")?;
+    Ok(())
+}
+
+/// Appends the sampled pixels of rows `[first, end)` (the frame uniform's `shade_rows`) and
+/// turns their count into the workgroups of the band's shading.
+pub fn record_rows(f: &mut Recorder, first: u32, end: u32) -> Result<(), GraphError> {
+    let start = f.dispatch(&PASS, "band_start", DispatchSize::Groups(1, 1, 1))?;
+    let mut list = f.frame_dispatch(&PASS, "main")?;
+    let rows = end.saturating_sub(first);
+    list.size = DispatchSize::Groups(f.size.0.div_ceil(8), rows.div_ceil(8), 1);
     let args = f.dispatch(&PASS, "indirect_args", DispatchSize::Groups(1, 1, 1))?;
-    f.compute(PASS.label, &[list, args]);
+    f.compute(PASS.label, &[start, list, args]);
     Ok(())
 }
