@@ -47,15 +47,15 @@ impl FrameInFlight {
 }
 
 /// One submission of a frame.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy)]
 enum Part {
     Whole,
     Prefix,
     /// Foveated: the sampling map (and an empty list).
     Sampling,
     Rows(u32, u32),
-    /// Foveated: the reconstruction, whole (`None`) or one of `frame::RECONSTRUCTION_PARTS`.
-    Reconstruction(Option<u32>),
+    /// Foveated: part `k` of the reconstruction's `frame::RECONSTRUCTION_PARTS`.
+    Reconstruction(u32),
     Suffix,
 }
 
@@ -74,7 +74,7 @@ fn later_parts(plan: &FramePlan, bands: Vec<(u32, u32)>) -> Vec<Part> {
         } else {
             1
         };
-        parts.extend((0..n).map(|i| Part::Reconstruction(Some(i))));
+        parts.extend((0..n).map(Part::Reconstruction));
     }
     parts.push(Part::Suffix);
     parts
@@ -268,7 +268,7 @@ impl Renderer {
             Part::Prefix => frame::record_prefix(&mut recorder, &plan, &sg.mesh)?,
             Part::Sampling => frame::record_sampling(&mut recorder)?,
             Part::Rows(a, b) => frame::record_rows(&mut recorder, &plan, a, b)?,
-            Part::Reconstruction(k) => frame::record_reconstruction(&mut recorder, &plan, k)?,
+            Part::Reconstruction(k) => frame::record_reconstruction(&mut recorder, &plan, Some(k))?,
             Part::Suffix => frame::record_suffix(&mut recorder, &plan)?,
         }
         t.routes = recorder.routes;
