@@ -63,11 +63,11 @@ fn a_sliced_frame_with_others_between_its_parts_equals_the_whole_frame() {
             }
         };
         // Prefix, five bands, suffix; foveated, the sampling and the reconstruction too (pull-push
-        // in two parts, JFA + Sibson in one).
+        // in three parts, JFA + Sibson in one).
         let foveated = preset == Preset::Balanced || preset == Preset::Quality;
         let expected = match (foveated, sibson) {
             (false, _) => 7,
-            (true, false) => 10,
+            (true, false) => 11,
             (true, true) => 9,
         };
         assert_eq!(parts, expected, "{preset} sibson {sibson}");

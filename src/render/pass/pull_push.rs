@@ -247,8 +247,8 @@ fn dispatch_cells(entry: &str, size: [u32; 2]) -> [u32; 2] {
 }
 
 /// Parts a frame in parts runs the dispatches in: the pulls and the pushes down to level 2,
-/// then level 1's push and the pixel fill (about 40% and 60% of the time).
-pub const PARTS: u32 = 2;
+/// level 1's push, the pixel fill (about 40%, 30% and 30% of the time).
+pub const PARTS: u32 = 3;
 
 /// Fills the frame in place (`shade.color`, whose samples the next frame's history already
 /// holds: `frame::record_reconstruction`), every dispatch (`part` None) or those of one of
@@ -274,12 +274,17 @@ pub fn record(f: &mut Recorder, part: Option<u32>) -> Result<(), GraphError> {
     }
     // A pass per dispatch, each level copied into its atlas before the next reads it; timed
     // as one.
-    let split = slots.iter().position(|(e, _)| *e == "push_level1");
-    let split = split.unwrap_or(slots.len());
+    let n = slots.len();
+    // Level 1's push is the last dispatch but the fill.
+    let split = slots
+        .iter()
+        .position(|(e, _)| *e == "push_level1")
+        .unwrap_or(n);
     let range = match part {
-        None => 0..slots.len(),
+        None => 0..n,
         Some(0) => 0..split,
-        Some(_) => split..slots.len(),
+        Some(1) => split..(split + 1).min(n),
+        Some(_) => (split + 1).min(n)..n,
     };
     if range.is_empty() {
         return Ok(());
