@@ -40,8 +40,8 @@ pub struct FoveationPolicy {
 }
 
 impl FoveationPolicy {
-    /// Turns foveation off in `req` where it does not pay (or to measure it); returns why,
-    /// for the frame's header. Requests without foveation are left alone.
+    /// Turns foveation off in `req` where it does not pay (or to measure it); returns why, for
+    /// the frame's header. Requests without foveation are left alone.
     pub fn apply(&mut self, cost: &CostModel, req: &mut FrameRequest) -> Option<String> {
         if !req.settings.foveation.enabled {
             return None;

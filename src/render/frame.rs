@@ -93,16 +93,12 @@ pub fn coarse_gather(s: &RenderSettings, needs_dipole: bool) -> bool {
 pub fn record(f: &mut Recorder, plan: &FramePlan, mesh: &MeshBuffers) -> Result<(), GraphError> {
     record_prefix(f, plan, mesh)?;
     if plan.foveated {
+        // One band: every row.
         record_sampling(f)?;
-        compact::record_rows(f, 0, f.size.1)?;
-    }
-    if plan.foveated && plan.compaction {
-        shade::record_list(f)?;
+        record_rows(f, plan, 0, f.size.1)?;
+        record_reconstruction(f, plan, None)?;
     } else {
         shade::record_grid(f, plan.coarse_gather)?;
-    }
-    if plan.foveated {
-        record_reconstruction(f, plan, None)?;
     }
     record_suffix(f, plan)
 }
@@ -130,12 +126,9 @@ pub fn record_sampling(f: &mut Recorder) -> Result<(), GraphError> {
     compact::clear(f)
 }
 
-/// Parts a sliced frame's pull-push reconstruction is split into (`pull_push::record`).
-pub const RECONSTRUCTION_PARTS: u32 = pull_push::PARTS;
-
 /// Foveated, after shading: the next frame's colour history (the samples alone), then the
-/// reconstruction, whole (`None`) or part `k` of [`RECONSTRUCTION_PARTS`] (JFA and resolve
-/// are one part).
+/// reconstruction, whole (`None`) or part `k` of `pull_push::PARTS` (JFA and resolve are
+/// one part).
 pub fn record_reconstruction(
     f: &mut Recorder,
     plan: &FramePlan,

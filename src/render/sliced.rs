@@ -9,7 +9,7 @@
 //! shares with other frames of its scene (shadow map, photon pyramid) must not be rebuilt for
 //! another light meanwhile: [`Renderer::conflicts`] says when a frame would.
 
-use std::collections::BTreeMap;
+use std::collections::{BTreeMap, VecDeque};
 use std::time::Instant;
 
 use glam::Vec3;
@@ -18,6 +18,7 @@ use super::frame::{self, FramePlan};
 use super::frame_uniform::frame_uniform;
 use super::graph::Recorder;
 use super::pass::photons::PhotonInputs;
+use super::pass::pull_push;
 use super::renderer::{not_loaded, Renderer, TargetKey};
 use super::request::{FrameRequest, GpuLowPass, Readback, RenderedFrame, MAX_SIDE};
 use super::uniforms::FrameUniform;
@@ -33,8 +34,8 @@ pub enum Progress {
 pub struct FrameInFlight {
     req: FrameRequest,
     key: TargetKey,
-    /// The parts still to run, next first.
-    parts: Vec<Part>,
+    /// The parts still to run, next first (the suffix last).
+    parts: VecDeque<Part>,
     to_light: Vec3,
     render_ms: f64,
     passes_ms: BTreeMap<String, f64>,
@@ -54,7 +55,7 @@ enum Part {
     /// Foveated: the sampling map (and an empty list).
     Sampling,
     Rows(u32, u32),
-    /// Foveated: part `k` of the reconstruction's `frame::RECONSTRUCTION_PARTS`.
+    /// Foveated: part `k` of the reconstruction's `pull_push::PARTS`.
     Reconstruction(u32),
     Suffix,
 }
@@ -62,21 +63,17 @@ enum Part {
 /// The parts after the prefix of a frame shaded in `bands`: each of the longest fixed passes
 /// of a foveated frame (at 3840×2160 on a software adapter the G-buffer, sampling and
 /// reconstruction run 0.2–0.6 s each) is a part of its own.
-fn later_parts(plan: &FramePlan, bands: Vec<(u32, u32)>) -> Vec<Part> {
-    let mut parts = Vec::new();
+fn later_parts(plan: &FramePlan, bands: Vec<(u32, u32)>) -> VecDeque<Part> {
+    let mut parts = VecDeque::new();
     if plan.foveated {
-        parts.push(Part::Sampling);
+        parts.push_back(Part::Sampling);
     }
     parts.extend(bands.into_iter().map(|(a, b)| Part::Rows(a, b)));
     if plan.foveated {
-        let n = if plan.pull_push {
-            frame::RECONSTRUCTION_PARTS
-        } else {
-            1
-        };
+        let n = if plan.pull_push { pull_push::PARTS } else { 1 };
         parts.extend((0..n).map(Part::Reconstruction));
     }
-    parts.push(Part::Suffix);
+    parts.push_back(Part::Suffix);
     parts
 }
 
@@ -125,7 +122,7 @@ impl Renderer {
                 let plan = FramePlan::of(&req.settings, w, h, self.targets[ti].1.needs_dipole);
                 later_parts(&plan, bands(h, slices))
             } else {
-                Vec::new()
+                VecDeque::new()
             },
             to_light: inputs.to_light,
             render_ms,
@@ -148,11 +145,7 @@ impl Renderer {
         };
         let started = Instant::now();
         self.timer.begin_frame();
-        let part = if f.parts.is_empty() {
-            Part::Suffix
-        } else {
-            f.parts.remove(0)
-        };
+        let part = f.parts.pop_front().unwrap_or(Part::Suffix);
         let submission = self.submit(&f.req, ti, part, None)?;
         for (pass, ms) in self.timer.read(&self.gpu.device, submission)? {
             *f.passes_ms.entry(pass).or_default() += ms;

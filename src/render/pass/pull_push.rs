@@ -115,11 +115,8 @@ fn origin(width: u32, height: u32, l: u32) -> [u32; 2] {
     if l == first {
         return [column_size(width, height, first).0, 0];
     }
-    let y = (first + 2..l)
-        .step_by(2)
-        .map(|k| level_size(width, height, k).1)
-        .sum();
-    [0, y]
+    let above = column(width, height, first).take_while(|&k| k < l);
+    [0, above.map(|k| level_size(width, height, k).1).sum()]
 }
 
 /// Texel size of the atlas of levels with parity `odd`, with its first level or without
@@ -256,25 +253,17 @@ pub const PARTS: u32 = 3;
 pub fn record(f: &mut Recorder, part: Option<u32>) -> Result<(), GraphError> {
     let (width, height) = f.size;
     let slots = slots(width, height);
-    let mut bytes = vec![0u8; slots.len() * SLOT as usize];
-    for (i, (_, s)) in slots.iter().enumerate() {
-        let at = i * SLOT as usize;
-        bytes[at..at + std::mem::size_of::<Level>()].copy_from_slice(bytemuck::bytes_of(s));
-    }
-    f.queue
-        .write_buffer(f.buffer("pull_push.levels")?, 0, &bytes);
-    let mut dispatches = Vec::with_capacity(slots.len());
-    for (i, (entry, s)) in slots.iter().enumerate() {
-        route(f, s.level, entry.starts_with("pull"));
-        let [w, h] = dispatch_cells(entry, s.size);
-        let size = DispatchSize::Groups(w.div_ceil(8), h.div_ceil(8), 1);
-        let mut d = f.dispatch(&PASS, entry, size)?;
-        d.offsets = vec![(i as u64 * SLOT) as u32];
-        dispatches.push(d);
-    }
-    // A pass per dispatch, each level copied into its atlas before the next reads it; timed
-    // as one.
     let n = slots.len();
+    if part.unwrap_or(0) == 0 {
+        // The level uniforms, once a frame: later parts find them in place.
+        let mut bytes = vec![0u8; n * SLOT as usize];
+        for (i, (_, s)) in slots.iter().enumerate() {
+            let at = i * SLOT as usize;
+            bytes[at..at + std::mem::size_of::<Level>()].copy_from_slice(bytemuck::bytes_of(s));
+        }
+        f.queue
+            .write_buffer(f.buffer("pull_push.levels")?, 0, &bytes);
+    }
     // Level 1's push is the last dispatch but the fill.
     let split = slots
         .iter()
@@ -289,16 +278,25 @@ pub fn record(f: &mut Recorder, part: Option<u32>) -> Result<(), GraphError> {
     if range.is_empty() {
         return Ok(());
     }
+    let mut dispatches = Vec::with_capacity(range.len());
+    for i in range.clone() {
+        let (entry, s) = &slots[i];
+        route(f, s.level, entry.starts_with("pull"));
+        let [w, h] = dispatch_cells(entry, s.size);
+        let size = DispatchSize::Groups(w.div_ceil(8), h.div_ceil(8), 1);
+        let mut d = f.dispatch(&PASS, entry, size)?;
+        d.offsets = vec![(i as u64 * SLOT) as u32];
+        dispatches.push(d);
+    }
+    // A pass per dispatch, each level copied into its atlas before the next reads it; timed
+    // as one.
     let span = f.timer.span(PASS.label);
-    let (first, last) = (range.start, range.end.saturating_sub(1));
-    for (i, ((entry, s), d)) in slots.iter().zip(&dispatches).enumerate() {
-        if !range.contains(&i) {
-            continue;
-        }
+    let last = dispatches.len() - 1;
+    for (k, ((entry, s), d)) in slots[range].iter().zip(&dispatches).enumerate() {
         {
             let mut pass = f.encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
                 label: Some(PASS.label),
-                timestamp_writes: f.timer.part(span, i == first, i == last),
+                timestamp_writes: f.timer.part(span, k == 0, k == last),
             });
             crate::render::graph::run(&mut pass, d, f.size);
         }
