@@ -10,28 +10,51 @@
 // dispatch arguments for shading the last band's samples; [4]: where they start in the list.
 @group(0) @binding(3) var<storage, read_write> counter: array<atomic<u32>, 8>;
 
-var<workgroup> tile_count: atomic<u32>;
-var<workgroup> tile_base: u32;
-
+// One invocation per 8×8 tile, its pixels in row-major order: the tile reserves its slots with
+// one global atomic, and no workgroup barrier is needed (a software adapter splits a shader
+// at each barrier into pieces it resumes one by one).
 @compute @workgroup_size(8, 8)
-fn main(@builtin(global_invocation_id) id: vec3<u32>, @builtin(local_invocation_index) li: u32) {
-    if (li == 0u) {
-        atomicStore(&tile_count, 0u);
+fn main(@builtin(global_invocation_id) id: vec3<u32>) {
+    let origin = vec2<i32>(id.xy * 8u + vec2<u32>(0u, frame.shade_rows.x));
+    let end = min(frame_size(), vec2<i32>(i32(frame.width), i32(frame.shade_rows.y)));
+    if (any(origin >= end)) {
+        return;
     }
-    workgroupBarrier();
-    let p = vec2<i32>(id.xy + vec2<u32>(0u, frame.shade_rows.x));
-    var slot = 0xFFFFFFFFu;
-    let listed = in_frame(p) && u32(p.y) < frame.shade_rows.y;
-    if (listed && (flags[index_of(p)] & FLAG_SAMPLED) != 0u) {
-        slot = atomicAdd(&tile_count, 1u);
+    // The tile's sampled pixels as bits, row-major: rows 0–3 in `lo`, 4–7 in `hi`.
+    let last = min(origin + 8, end);
+    var lo = 0u;
+    var hi = 0u;
+    for (var y = origin.y; y < last.y; y++) {
+        var row = 0u;
+        for (var x = origin.x; x < last.x; x++) {
+            let f = flags[index_of(vec2<i32>(x, y))];
+            row |= select(0u, 1u, (f & FLAG_SAMPLED) != 0u) << u32(x - origin.x);
+        }
+        let r = u32(y - origin.y);
+        if (r < 4u) {
+            lo |= row << (8u * r);
+        } else {
+            hi |= row << (8u * (r - 4u));
+        }
     }
-    workgroupBarrier();
-    if (li == 0u) {
-        tile_base = atomicAdd(&counter[0], atomicLoad(&tile_count));
+    let upper = countOneBits(lo);
+    let count = upper + countOneBits(hi);
+    if (count == 0u) {
+        return;
     }
-    let base = workgroupUniformLoad(&tile_base);
-    if (slot != 0xFFFFFFFFu) {
-        list[base + slot] = pack_seed(p);
+    let slot = atomicAdd(&counter[0], count);
+    append(&lo, origin, slot);
+    append(&hi, origin + vec2<i32>(0, 4), slot + upper);
+}
+
+// Lists the pixels of four tile rows from `origin` whose bits are set in `bits`, from `slot`.
+fn append(bits: ptr<function, u32>, origin: vec2<i32>, slot: u32) {
+    var s = slot;
+    while (*bits != 0u) {
+        let b = firstTrailingBit(*bits);
+        *bits &= *bits - 1u;
+        list[s] = pack_seed(origin + vec2<i32>(i32(b & 7u), i32(b >> 3u)));
+        s += 1u;
     }
 }
 
