@@ -12,11 +12,13 @@
 
 // One invocation per 8×8 tile, its pixels in row-major order: the tile reserves its slots with
 // one global atomic, and no workgroup barrier is needed (a software adapter splits a shader
-// at each barrier into pieces it resumes one by one).
+// at each barrier into pieces it resumes one by one). A workgroup's 8×8 tiles are listed
+// together, so a shading workgroup takes neighbouring samples: on that adapter shading was
+// 10–20% slower while each tile was a workgroup and the worker threads' tiles interleaved.
 @compute @workgroup_size(8, 8)
 fn main(@builtin(global_invocation_id) id: vec3<u32>) {
     let origin = vec2<i32>(id.xy * 8u + vec2<u32>(0u, frame.shade_rows.x));
-    let end = min(frame_size(), vec2<i32>(i32(frame.width), i32(frame.shade_rows.y)));
+    let end = vec2<i32>(i32(frame.width), i32(min(frame.height, frame.shade_rows.y)));
     if (any(origin >= end)) {
         return;
     }

@@ -31,6 +31,7 @@ pub fn record_rows(f: &mut Recorder, first: u32, end: u32) -> Result<(), GraphEr
     let start = f.dispatch(&PASS, "band_start", DispatchSize::Groups(1, 1, 1))?;
     let mut list = f.frame_dispatch(&PASS, "main")?;
     let rows = end.saturating_sub(first);
+    // An invocation lists an 8×8 tile, a workgroup 8×8 tiles.
     list.size = DispatchSize::Groups(f.size.0.div_ceil(64), rows.div_ceil(64), 1);
     let args = f.dispatch(&PASS, "indirect_args", DispatchSize::Groups(1, 1, 1))?;
     f.compute(PASS.label, &[start, list, args]);
