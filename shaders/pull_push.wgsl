@@ -4,8 +4,7 @@
 // divided by albedo (floor `level.floor`) so texture edges come back from the G-buffer, not from
 // samples. CPU twin and the reasoning: foveation::pull_push.
 
-// The shaded colour, filled in place where a pixel holds no sample (the next frame's history
-// was copied from it before this pass).
+// The shaded colour, filled in place where a pixel has no sample (history was copied before).
 @group(0) @binding(1) var<storage, read_write> color: array<vec4<f32>>;
 @group(0) @binding(2) var<storage, read> flags: array<u32>;
 @group(0) @binding(3) var albedo_tex: texture_2d<f32>;
@@ -79,8 +78,7 @@ fn store_cell(c: vec2<u32>, v: Cell) {
     moments_staged_hi[i + 2u * n] = vec4<f32>(v.material_var, 0.0, 0.0, 0.0);
 }
 
-// This level's cell `c` completed, to the staging buffer: value and material spread,
-// gradient, depth, range and material.
+// Cell `c` completed, to the staging buffer: value, material spread, gradient, depth, range.
 fn store_plane(c: vec2<u32>, v: Cell) {
     let i = c.y * level.row + c.x;
     let n = level.size.y * level.row;
@@ -103,8 +101,7 @@ fn material_of(albedo: vec4<f32>) -> f32 {
     return round(albedo.a * 255.0);
 }
 
-// A pixel as a cell: its demodulated colour when it holds a sample, else (or past the frame)
-// empty.
+// A pixel as a cell: its demodulated colour when it holds a sample, else (or off frame) empty.
 fn pixel_cell(p: vec2<i32>) -> Cell {
     var out = empty_cell();
     if (!in_frame(p)) {
@@ -207,8 +204,7 @@ fn pull_pixels(@builtin(global_invocation_id) id: vec3<u32>) {
     store_cell(id.xy, merge(c0, c1, c2, c3));
 }
 
-// Child `i` (0..3, row-major) of cell `id` one level down (the `near` level), or an empty
-// cell past its border.
+// Child `i` (0..3, row-major) of cell `id` one level down (`near`), or empty past its border.
 fn child_cell(id: vec2<u32>, i: u32) -> Cell {
     let q = 2u * id + vec2<u32>(i & 1u, i >> 1u);
     if (all(q < level.near_size)) {
@@ -285,8 +281,7 @@ fn blend_add(acc: ptr<function, Blend>, p: Plane, k: f32, centre: vec2<f32>, aim
     (*acc).hi = max((*acc).hi, p.hi);
 }
 
-// The blend as a plane. Each parent's plane is exact for a linear function, so any normalised
-// weights keep it exact.
+// The blend as a plane: each parent's is exact for a linear function, so any such blend is.
 fn blend_end(acc: Blend, aim: vec2<f32>) -> Cell {
     var out = empty_cell();
     out.depth = aim.x;
@@ -401,8 +396,7 @@ fn push_quad(o: vec2<i32>, par: Parents, kind: u32) {
     }
 }
 
-// What a push computes (a constant per entry point): planes from stored moments, level 1's
-// planes from its pixels, or the pixels.
+// What a push computes (a constant per entry point): planes from moments, level 1's, pixels.
 const PUSH_CELLS: u32 = 0u;
 const PUSH_LEVEL1: u32 = 1u;
 const PUSH_PIXELS: u32 = 2u;
@@ -487,12 +481,18 @@ fn push_pixel(p: vec2<i32>, par: Parents) {
     if ((f & FLAG_COVERED) == 0u || (f & (FLAG_SAMPLED | FLAG_REUSED)) != 0u) {
         return;
     }
-    // Bounded by the samples around the pixel: a plane cannot overshoot what they hold.
     let nd = textureLoad(normal_distance, p, 0);
     let albedo = textureLoad(albedo_tex, p, 0);
     let key = vec2<f32>(nd.w, material_of(albedo));
     let coarse = coarse_plane(par, vec2<f32>(p) + 0.5, 0u, key);
+    // Inside its parents' square (not at the border), within their own values per channel (a
+    // linear ratio there stays so); then the samples' range. foveation::pull_push::within_corners
     var lit = coarse.c;
+    let b = parent_base(vec2<f32>(p) + 0.5, 0u).xy;
+    if (all(b >= vec2<f32>(0.0)) && all(b + 1.0 < vec2<f32>(level.near_size))) {
+        lit = clamp(lit, min(min(par.p0.c, par.p1.c), min(par.p2.c, par.p3.c)),
+            max(max(par.p0.c, par.p1.c), max(par.p2.c, par.p3.c)));
+    }
     if (coarse.lo <= coarse.hi) {
         lit = clamp(lit, vec3<f32>(coarse.lo), vec3<f32>(coarse.hi));
     }

@@ -211,15 +211,10 @@ pub fn coarse_plane(
     let base = [u[0].floor(), u[1].floor()];
     let f = [u[0] - base[0], u[1] - base[1]];
     let mut parents = [(Cell::default(), [0.0f32; 2], 0.0f32); 4];
-    let mut i = 0;
-    for (dy, wy) in [(0, 1.0 - f[1]), (1, f[1])] {
-        for (dx, wx) in [(0, 1.0 - f[0]), (1, f[0])] {
-            let px = (base[0] as i64 + dx).clamp(0, i64::from(parent_size.0) - 1) as u32;
-            let py = (base[1] as i64 + dy).clamp(0, i64::from(parent_size.1) - 1) as u32;
-            let pc = [(px as f32 + 0.5) * ps, (py as f32 + 0.5) * ps];
-            parents[i] = (parent[(py * parent_size.0 + px) as usize], pc, wx * wy);
-            i += 1;
-        }
+    for (i, (k, wxy)) in parent_indices(parent_size, base, f).into_iter().enumerate() {
+        let (px, py) = (k % parent_size.0, k / parent_size.0);
+        let pc = [(px as f32 + 0.5) * ps, (py as f32 + 0.5) * ps];
+        parents[i] = (parent[k as usize], pc, wxy);
     }
     let target = key.unwrap_or_else(|| Key {
         depth: parents.iter().map(|(p, _, k)| k * p.depth).sum(),
@@ -256,6 +251,52 @@ pub fn coarse_plane(
         }
     }
     out
+}
+
+/// The four bilinear parents of a point at parent-grid position `base` + `f` (`f` in [0, 1)),
+/// clamped into the parent level (edge cells stand in past its border): index and weight.
+fn parent_indices(parent_size: (u32, u32), base: [f32; 2], f: [f32; 2]) -> [(u32, f32); 4] {
+    let mut out = [(0, 0.0); 4];
+    let mut i = 0;
+    for (dy, wy) in [(0, 1.0 - f[1]), (1, f[1])] {
+        for (dx, wx) in [(0, 1.0 - f[0]), (1, f[0])] {
+            let px = (base[0] as i64 + dx).clamp(0, i64::from(parent_size.0) - 1) as u32;
+            let py = (base[1] as i64 + dy).clamp(0, i64::from(parent_size.1) - 1) as u32;
+            out[i] = (py * parent_size.0 + px, wx * wy);
+            i += 1;
+        }
+    }
+    out
+}
+
+/// `v` clamped per channel between the smallest and largest value of pixel (x, y)'s four
+/// level-1 parents at their own centres, where the pixel lies inside their square (not in the
+/// frame's outer ring). A linear ratio there is bilinear in the corners and never leaves them;
+/// a plane fitted to a highlight's steep flank, evaluated a pixel away, does (a dark dot beside
+/// the highlight, inside the wider range of the samples around). The GPU's fill
+/// (`push_pixel`) applies the same bound.
+pub fn within_corners(
+    parent: &[Cell],
+    parent_size: (u32, u32),
+    (x, y): (u32, u32),
+    v: [f32; 3],
+) -> [f32; 3] {
+    let u = [(x as f32 + 0.5) / 2.0 - 0.5, (y as f32 + 0.5) / 2.0 - 0.5];
+    let base = [u[0].floor(), u[1].floor()];
+    // At the border the parents are clamped and their square does not hold the pixel, where a
+    // linear ratio rightly extrapolates.
+    let inside = |b: f32, n: u32| b >= 0.0 && b + 1.0 < n as f32;
+    if !(inside(base[0], parent_size.0) && inside(base[1], parent_size.1)) {
+        return v;
+    }
+    let parents = parent_indices(parent_size, base, [u[0] - base[0], u[1] - base[1]]);
+    std::array::from_fn(|ch| {
+        let values = parents.map(|(k, _)| parent[k as usize].c[ch]);
+        let lo = values.iter().copied().fold(f32::INFINITY, f32::min);
+        let hi = values.iter().copied().fold(f32::NEG_INFINITY, f32::max);
+        // As WGSL's clamp: min(max(v, lo), hi), which never panics.
+        v[ch].max(lo).min(hi)
+    })
 }
 
 /// Completes one cell from its pulled moments and the coarse plane at its centre; `ridge` is
@@ -384,7 +425,10 @@ pub fn pyramid(
                         material: cell.material,
                     })
                 };
-                let coarse = coarse_plane(parent, parent_size, l, (x, y), target);
+                let mut coarse = coarse_plane(parent, parent_size, l, (x, y), target);
+                if l == 0 && cell.w <= 0.0 {
+                    coarse.c = within_corners(parent, parent_size, (x, y), coarse.c);
+                }
                 cells[k] = complete(&cell, &coarse, LAMBDA, l, (x, y));
             }
         }
