@@ -30,8 +30,8 @@ fn no_pixel_on_a_steep_flank_is_darker_than_its_parents() {
             if samples[k].is_some() {
                 continue;
             }
-            // The parents whose centres surround pixel (x, y): level-1 cells (x+1)/2 − 1 and on.
-            let (bx, by) = ((x + 1) / 2 - 1, (y + 1) / 2 - 1);
+            // The parents whose centres surround pixel (x, y): level-1 cells ⌈x/2⌉ − 1 and on.
+            let (bx, by) = (x.div_ceil(2) - 1, y.div_ceil(2) - 1);
             let lowest = [(bx, by), (bx + 1, by), (bx, by + 1), (bx + 1, by + 1)]
                 .map(|(px, py)| levels[1][(py * pw + px) as usize].c[0])
                 .into_iter()
