@@ -1,26 +1,23 @@
 // Pull-push reconstruction (seed 000's hierarchical interpolation on the foveated samples):
 // first-order moments pulled up a pyramid of 2×2 cells, planes pushed back down, every pixel
-// without a sample filled from the bilinear blend of its four level-1 planes. Works on lighting
-// divided by albedo (floor `level.floor`) so texture edges come back from the G-buffer, not from
-// samples. CPU twin and the reasoning: foveation::pull_push.
+// without a sample filled from the blend of its four level-1 planes, on colour over what the
+// G-buffer predicts (`proxy`). CPU twin and the reasoning: foveation::pull_push.
 
-// The shaded colour, filled in place where a pixel has no sample (history was copied before).
+// The shaded colour, filled in place where a pixel has no sample.
 @group(0) @binding(1) var<storage, read_write> color: array<vec4<f32>>;
 @group(0) @binding(2) var<storage, read> flags: array<u32>;
 @group(0) @binding(3) var albedo_tex: texture_2d<f32>;
 @group(0) @binding(6) var normal_distance: texture_2d<f32>;
-// The pyramid is read from textures: a software adapter gathers a texel per lane at once but
-// loads buffer values one lane at a time. Levels alternate between two atlases (odd, even);
-// `_in` is routed per dispatch. A dispatch writes its level to staging buffers (there a storage
-// texture's store costs seven times a buffer's), then copied into the atlas.
+// The pyramid is read from textures (a software adapter loads buffers one lane at a time), two
+// atlases (odd, even levels; `_in` routed per dispatch); a dispatch writes its level to staging
+// buffers (a storage texture's store costs seven times a buffer's), copied into the atlas.
 @group(0) @binding(4) var<storage, read_write> moments_staged: array<vec4<f32>>;
 @group(0) @binding(10) var<storage, read_write> moments_staged_hi: array<vec4<f32>>;
 @group(0) @binding(7) var moments_in: texture_2d_array<f32>;
 @group(0) @binding(8) var planes_in: texture_2d_array<f32>;
 @group(0) @binding(9) var<storage, read_write> planes_staged: array<vec4<f32>>;
 
-// One level's dispatch: this level's size and corner in its atlas, and the same of its
-// neighbour level (pull: the children's level below; push: the parents' level above).
+// One dispatch: this level's size and corner in its atlas, and its neighbour's (pull: below).
 struct Level {
     size: vec2<u32>,
     origin: vec2<u32>,
@@ -39,9 +36,8 @@ struct Level {
 @group(0) @binding(5) var<uniform> level: Level;
 
 // Moments (pull): c, w, mean, scatter s = (xx, xy, yy), cross terms t per axis, mean depth and
-// material id with their spreads, sample range (lo, hi over all channels). Six layers per cell:
-// (c, w), (mean, s.xy), (tx, s.z), (ty, depth), (lo, hi, material, depth_var),
-// (material_var, 0, 0, 0). Push writes the cell's plane to four layers (`store_plane`).
+// material id with spreads, sample range (lo, hi over all channels). Six layers: (c, w), (mean,
+// s.xy), (tx, s.z), (ty, depth), (lo, hi, material, depth_var), (material_var). Planes: four.
 struct Cell {
     c: vec3<f32>, w: f32, mean: vec2<f32>, s: vec3<f32>, tx: vec3<f32>, ty: vec3<f32>,
     depth: f32, lo: f32, hi: f32, material: f32, depth_var: f32, material_var: f32,
@@ -88,10 +84,9 @@ fn store_plane(c: vec2<u32>, v: Cell) {
     planes_staged[i + 3u * n] = vec4<f32>(v.lo, v.hi, v.material, v.depth_var);
 }
 
-// What the G-buffer (texels `nd`, `albedo`) alone predicts of a pixel's colour: the key light's
-// Lambert term with the ambient, on the albedo, plus the floor. Reconstruction works on colour
-// / proxy, so texture, normal-map and shading-normal detail come back per pixel and only what
-// the proxy misses (shadows, specular, subsurface light, other lights) is interpolated.
+// What the G-buffer (`nd`, `albedo`) alone predicts of a pixel's colour: the key light's Lambert
+// term with the ambient, on the albedo, plus the floor. Colour / proxy is interpolated, so
+// texture and normal detail come back per pixel, and only what the proxy misses.
 fn proxy(nd: vec4<f32>, albedo: vec4<f32>) -> vec3<f32> {
     return lambert(nd.xyz, albedo.rgb) + level.floor;
 }
@@ -177,9 +172,8 @@ fn add_spreads(out: ptr<function, Cell>, ch: Cell) {
     (*out).ty += ch.ty + ch.w * d.y * dc;
 }
 
-// Level 1's cell `q` merged from its pixels, or an empty cell past level 1 (`bound`). Never
-// stored (`pull_pixels` and `push_level1` each merge it): on a software adapter its six layers'
-// stores and copy into the atlas cost more than the pixels' reads and the merge.
+// Level 1's cell `q` merged from its pixels, or empty past level 1 (`bound`). Never stored
+// (pull_pixels and push_level1 each merge it): its stores and copy cost more on lavapipe.
 fn level1_cell(q: vec2<u32>, bound: vec2<u32>) -> Cell {
     if (any(q >= bound)) {
         return empty_cell();
@@ -247,8 +241,7 @@ fn parent_base(centre: vec2<f32>, l: u32) -> vec4<f32> {
     return vec4<f32>(base, u - base);
 }
 
-// Running sums of the blend: depth-weighted (b) and plain bilinear (k, the fallback when every
-// parent lies on another surface). Sums, not an array of parents (on a CPU adapter it spills).
+// Sums of the blend: depth-weighted (b), plain bilinear (k: if every parent lies elsewhere).
 struct Blend {
     c: vec3<f32>, tx: vec3<f32>, ty: vec3<f32>, b: f32,
     ck: vec3<f32>, txk: vec3<f32>, tyk: vec3<f32>, lo: f32, hi: f32,
@@ -259,9 +252,8 @@ fn blend_start() -> Blend {
     return Blend(z, z, z, 0.0, z, z, z, BIG, -BIG);
 }
 
-// Adds parent `p` with bilinear weight k, its plane evaluated at `centre`, weighted further by
-// the expected squared difference of depth and material between `aim` (depth, material) and a
-// sample under the parent: the means' difference squared plus the parent's spread.
+// Adds parent `p`'s plane at `centre`, weight k over the expected squared difference of depth
+// and material between `aim` and a sample under it (means' difference² plus its spread).
 fn blend_add(acc: ptr<function, Blend>, p: Plane, k: f32, centre: vec2<f32>, aim: vec2<f32>) {
     let d = centre - p.centre;
     let v = p.c + p.tx * d.x + p.ty * d.y;
@@ -308,9 +300,8 @@ fn bilinear_weight(f: vec2<f32>, j: i32) -> f32 {
 // The four parents around a cell, in bilinear order from the one with the smallest x and y.
 struct Parents { p0: Plane, p1: Plane, p2: Plane, p3: Plane }
 
-// The coarse plane at a level-`l` cell centre from its parents (`parent_base`'s, loaded by the
-// caller), blended bilinearly and by closeness to `key` = (depth, material) (depth < 0: the
-// parents' own bilinear blend). Empty for the top cell, which has no parents.
+// The coarse plane at a level-`l` centre from its parents (loaded by the caller), blended by
+// bilinear weight and closeness to `key` = (depth, material) (depth < 0: the parents' blend).
 fn coarse_plane(par: Parents, centre: vec2<f32>, l: u32, key: vec2<f32>) -> Cell {
     if (level.has_parent == 0u) {
         return empty_cell();
@@ -396,6 +387,18 @@ fn push_quad(o: vec2<i32>, par: Parents, kind: u32) {
     }
 }
 
+// `v` at a level-`l` centre (a pixel or an empty level-1 cell) inside its parents' square, not
+// at the border: within their own values per channel (a linear ratio there stays so). CPU
+// twin: foveation::pull_push::within_corners.
+fn within_corners(v: vec3<f32>, par: Parents, centre: vec2<f32>, l: u32) -> vec3<f32> {
+    let b = parent_base(centre, l).xy;
+    if (any(b < vec2<f32>(0.0)) || any(b + 1.0 >= vec2<f32>(level.near_size))) {
+        return v;
+    }
+    let lo = min(min(par.p0.c, par.p1.c), min(par.p2.c, par.p3.c));
+    return clamp(v, lo, max(max(par.p0.c, par.p1.c), max(par.p2.c, par.p3.c)));
+}
+
 // What a push computes (a constant per entry point): planes from moments, level 1's, pixels.
 const PUSH_CELLS: u32 = 0u;
 const PUSH_LEVEL1: u32 = 1u;
@@ -431,7 +434,11 @@ fn push_cell(c: vec2<i32>, par: Parents, kind: u32) {
     }
     let coarse = coarse_plane(par, centre, level.level, aim);
     if (cell.w <= 0.0) {
-        store_plane(vec2<u32>(c), coarse);
+        var bounded = coarse;
+        if (kind == PUSH_LEVEL1) {
+            bounded.c = within_corners(coarse.c, par, centre, 1u);
+        }
+        store_plane(vec2<u32>(c), bounded);
         return;
     }
     let lambda = level.ridge * cell.w * side * side;
@@ -485,14 +492,7 @@ fn push_pixel(p: vec2<i32>, par: Parents) {
     let albedo = textureLoad(albedo_tex, p, 0);
     let key = vec2<f32>(nd.w, material_of(albedo));
     let coarse = coarse_plane(par, vec2<f32>(p) + 0.5, 0u, key);
-    // Inside its parents' square (not at the border), within their own values per channel (a
-    // linear ratio there stays so); then the samples' range. foveation::pull_push::within_corners
-    var lit = coarse.c;
-    let b = parent_base(vec2<f32>(p) + 0.5, 0u).xy;
-    if (all(b >= vec2<f32>(0.0)) && all(b + 1.0 < vec2<f32>(level.near_size))) {
-        lit = clamp(lit, min(min(par.p0.c, par.p1.c), min(par.p2.c, par.p3.c)),
-            max(max(par.p0.c, par.p1.c), max(par.p2.c, par.p3.c)));
-    }
+    var lit = within_corners(coarse.c, par, vec2<f32>(p) + 0.5, 0u);
     if (coarse.lo <= coarse.hi) {
         lit = clamp(lit, vec3<f32>(coarse.lo), vec3<f32>(coarse.hi));
     }

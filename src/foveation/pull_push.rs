@@ -269,12 +269,12 @@ fn parent_indices(parent_size: (u32, u32), base: [f32; 2], f: [f32; 2]) -> [(u32
     out
 }
 
-/// `v` clamped per channel between the smallest and largest value of pixel (x, y)'s four
-/// level-1 parents at their own centres, where the pixel lies inside their square (not in the
-/// frame's outer ring). A linear ratio there is bilinear in the corners and never leaves them;
-/// a plane fitted to a highlight's steep flank, evaluated a pixel away, does (a dark dot beside
-/// the highlight, inside the wider range of the samples around). The GPU's fill
-/// (`push_pixel`) applies the same bound.
+/// `v` at cell (x, y) of a level (a pixel, or an empty level-1 cell) clamped per channel
+/// between the smallest and largest value of its four parents at their own centres, where the
+/// cell lies inside their square (not in the level's outer ring). A linear ratio there is
+/// bilinear in the corners and never leaves them; a plane fitted to a highlight's steep flank,
+/// evaluated a pixel away, does (a dark dot beside the highlight, inside the wider range of
+/// the samples around). The GPU (`within_corners` in the shader) applies the same bound.
 pub fn within_corners(
     parent: &[Cell],
     parent_size: (u32, u32),
@@ -426,7 +426,8 @@ pub fn pyramid(
                     })
                 };
                 let mut coarse = coarse_plane(parent, parent_size, l, (x, y), target);
-                if l == 0 && cell.w <= 0.0 {
+                // Pixels and level 1's empty cells, whose values the pixels are bounded by.
+                if l <= 1 && cell.w <= 0.0 {
                     coarse.c = within_corners(parent, parent_size, (x, y), coarse.c);
                 }
                 cells[k] = complete(&cell, &coarse, LAMBDA, l, (x, y));
