@@ -240,12 +240,9 @@ pub struct Pipelines {
     modules: HashMap<&'static str, wgpu::ShaderModule>,
     /// By pass, entry point and the frame mode it was specialised for (if it was).
     compute: HashMap<(&'static str, &'static str, Option<u32>), wgpu::ComputePipeline>,
-    render: HashMap<&'static str, wgpu::RenderPipeline>,
+    /// By pass and variant (the pass's own key for the constants it was built with).
+    render: HashMap<(&'static str, u32), wgpu::RenderPipeline>,
 }
-
-/// Builds a raster pass's pipeline from its layout and shader module.
-pub type BuildRender =
-    fn(&wgpu::Device, &wgpu::BindGroupLayout, &wgpu::ShaderModule) -> wgpu::RenderPipeline;
 
 impl Pipelines {
     pub fn new(device: &wgpu::Device) -> Pipelines {
@@ -318,15 +315,27 @@ impl Pipelines {
 }
 
 impl Pipelines {
-    /// A raster pass's pipeline, built by `build` on first use.
-    pub fn render(&mut self, decl: &PassDecl, build: BuildRender) -> wgpu::RenderPipeline {
-        if let Some(p) = self.render.get(decl.label) {
+    /// A raster pass's pipeline, built by `build` from the pass's layout and shader module on
+    /// first use of this `variant` (a pass that specialises its shader per scene numbers the
+    /// constant sets it builds; others pass 0).
+    pub fn render(
+        &mut self,
+        decl: &PassDecl,
+        variant: u32,
+        build: impl FnOnce(
+            &wgpu::Device,
+            &wgpu::BindGroupLayout,
+            &wgpu::ShaderModule,
+        ) -> wgpu::RenderPipeline,
+    ) -> wgpu::RenderPipeline {
+        let key = (decl.label, variant);
+        if let Some(p) = self.render.get(&key) {
             return p.clone();
         }
         let layout = self.layout(decl);
         let module = self.module(decl);
         let p = build(&self.device, &layout, &module);
-        self.render.insert(decl.label, p.clone());
+        self.render.insert(key, p.clone());
         p
     }
 }

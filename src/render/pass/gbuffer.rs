@@ -3,9 +3,7 @@
 
 use wgpu::util::DeviceExt;
 
-use crate::render::graph::{
-    read, sampler, texture_array, uniform, BuildRender, GraphError, PassDecl, Recorder,
-};
+use crate::render::graph::{read, sampler, texture_array, uniform, GraphError, PassDecl, Recorder};
 use crate::render::textures::SAMPLERS;
 use crate::scene::Scene;
 
@@ -61,8 +59,57 @@ pub struct MeshBuffers {
     pub index_count: u32,
     /// `GiVertex` per vertex; zeros until (and unless) radiosity writes it.
     pub gi: wgpu::Buffer,
-    /// Some texture clamps or mirrors: the G-buffer takes its wrap-mode pipeline.
+    /// Which maps the scene has: the G-buffer's pipeline reads only those.
+    pub maps: MapUse,
+}
+
+/// The kinds of map a scene's materials use, and whether any clamps or mirrors: the
+/// G-buffer's pipeline is specialised for them (the shader's override constants), as a
+/// software adapter pays for a map read on every pixel whether or not its material has one.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct MapUse {
+    pub base: bool,
+    pub normal: bool,
+    pub occlusion: bool,
     pub wrap_modes: bool,
+}
+
+impl MapUse {
+    pub fn of(scene: &Scene) -> MapUse {
+        fn any<T>(per_material: &[Option<T>]) -> bool {
+            per_material.iter().any(Option::is_some)
+        }
+        MapUse {
+            base: any(&scene.material_textures),
+            normal: any(&scene.material_normal_maps),
+            occlusion: any(&scene.material_occlusion_maps),
+            wrap_modes: scene
+                .textures
+                .iter()
+                .chain(&scene.linear_maps)
+                .any(|t| t.sampling.code() != 0),
+        }
+    }
+
+    /// The pipeline cache's key for this set: one bit each.
+    fn variant(self) -> u32 {
+        [self.base, self.normal, self.occlusion, self.wrap_modes]
+            .iter()
+            .enumerate()
+            .map(|(i, &on)| u32::from(on) << i)
+            .sum()
+    }
+
+    /// The shader's override constants for this set.
+    fn constants(self) -> [(&'static str, f64); 4] {
+        let f = |on: bool| f64::from(u8::from(on));
+        [
+            ("BASE_MAPS", f(self.base)),
+            ("NORMAL_MAPS", f(self.normal)),
+            ("OCCLUSION_MAPS", f(self.occlusion)),
+            ("WRAP_MODES", f(self.wrap_modes)),
+        ]
+    }
 }
 
 pub const PASS: PassDecl = PassDecl {
@@ -94,38 +141,18 @@ pub const PASS: PassDecl = PassDecl {
     entry_points: &["vs_main", "fs_main"],
 };
 
-/// The G-buffer of a scene with a map that clamps or mirrors: the same pass with the shader's
-/// `WRAP_MODES` on (its own label only so the pipeline caches keep the two apart).
-pub const PASS_WRAPPED: PassDecl = PassDecl {
-    label: "gbuffer (wrap modes)",
-    ..PASS
-};
-
 fn pipeline(
     device: &wgpu::Device,
     layout: &wgpu::BindGroupLayout,
     module: &wgpu::ShaderModule,
+    maps: MapUse,
 ) -> wgpu::RenderPipeline {
     let targets = [NORMAL_DISTANCE, ALBEDO, BLURRED_NORMAL, IRRADIANCE];
     // No culling here: the fragment shader culls per material (double-sided ones keep their
     // back faces).
-    mesh_pipeline(device, PASS.label, layout, module, &targets, None, &[])
-}
-
-fn pipeline_wrapped(
-    device: &wgpu::Device,
-    layout: &wgpu::BindGroupLayout,
-    module: &wgpu::ShaderModule,
-) -> wgpu::RenderPipeline {
-    let targets = [NORMAL_DISTANCE, ALBEDO, BLURRED_NORMAL, IRRADIANCE];
+    let constants = maps.constants();
     mesh_pipeline(
-        device,
-        PASS_WRAPPED.label,
-        layout,
-        module,
-        &targets,
-        None,
-        &[("WRAP_MODES", 1.0)],
+        device, PASS.label, layout, module, &targets, None, &constants,
     )
 }
 
@@ -186,13 +213,11 @@ pub fn mesh_pipeline(
 
 /// Rasterises `mesh` into the G-buffer targets.
 pub fn record(f: &mut Recorder, mesh: &MeshBuffers) -> Result<(), GraphError> {
-    let (decl, build): (&PassDecl, BuildRender) = if mesh.wrap_modes {
-        (&PASS_WRAPPED, pipeline_wrapped)
-    } else {
-        (&PASS, pipeline)
-    };
-    let pipeline = f.pipelines.render(decl, build);
-    let bind_group = f.bind_group(decl)?;
+    let maps = mesh.maps;
+    let pipeline = f
+        .pipelines
+        .render(&PASS, maps.variant(), |d, l, m| pipeline(d, l, m, maps));
+    let bind_group = f.bind_group(&PASS)?;
     let view = |name| f.view(name).cloned();
     let (nd, albedo, blurred, irradiance, depth) = (
         view("gbuffer.normal_distance")?,
@@ -297,10 +322,37 @@ pub fn upload(device: &wgpu::Device, scene: &Scene) -> MeshBuffers {
         indices,
         index_count: mesh.indices.len() as u32,
         gi,
-        wrap_modes: scene
-            .textures
-            .iter()
-            .chain(&scene.linear_maps)
-            .any(|t| t.sampling.code() != 0),
+        maps: MapUse::of(scene),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_pipeline_reads_only_the_maps_a_scene_has() {
+        let of = |name| MapUse::of(&Scene::builtin(name).expect("builtin scene"));
+        // JSON scenes have no maps: all three reads are compiled out.
+        assert_eq!(of("opaque"), MapUse::default());
+        // The glTF gallery's tiles have a base colour and a normal map, no occlusion map,
+        // and every map repeats.
+        let gallery = of("gallery");
+        assert!(gallery.base && gallery.normal);
+        assert!(!gallery.occlusion && !gallery.wrap_modes);
+        // Every set is its own pipeline, and its constants say what it holds.
+        let sets: Vec<MapUse> = (0..16u32)
+            .map(|k| MapUse {
+                base: k & 1 != 0,
+                normal: k & 2 != 0,
+                occlusion: k & 4 != 0,
+                wrap_modes: k & 8 != 0,
+            })
+            .collect();
+        for (k, set) in sets.iter().enumerate() {
+            assert_eq!(set.variant(), k as u32);
+            let on: Vec<bool> = set.constants().iter().map(|(_, v)| *v == 1.0).collect();
+            assert_eq!(on, [set.base, set.normal, set.occlusion, set.wrap_modes]);
+        }
     }
 }

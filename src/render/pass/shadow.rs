@@ -194,7 +194,7 @@ impl ShadowMap {
                 .map(|(_, v)| v.clone())
                 .ok_or(missing(name))
         };
-        let pipeline = pipelines.render(&PASS, pipeline);
+        let pipeline = pipelines.render(&PASS, 0, pipeline);
         let key = ShadowUniform {
             light_view_proj: view.view_proj.to_cols_array_2d(),
             light_pos: [0.0; 4],
