@@ -14,6 +14,8 @@ use std::collections::HashMap;
 use super::gpu;
 use super::timer::PassTimer;
 
+pub use super::pipelines::{Pipelines, Specialised, MAX_SPECIALISED};
+
 pub use super::binding::{
     dynamic_uniform, layers, read, sampler, texture, texture_array, uint_texture, uniform, write,
     write_uint, Access, Binding,
@@ -60,7 +62,7 @@ impl PassDecl {
             .collect()
     }
 
-    fn layout_entries(&self) -> Vec<wgpu::BindGroupLayoutEntry> {
+    pub(super) fn layout_entries(&self) -> Vec<wgpu::BindGroupLayoutEntry> {
         self.numbered()
             .map(|(i, b)| b.access.layout_entry(i))
             .collect()
@@ -230,116 +232,6 @@ pub struct BindKey {
     pub resources: Vec<&'static str>,
 }
 
-/// Pipelines one entry point may have specialised for different frame modes.
-pub const MAX_SPECIALISED: usize = 8;
-
-/// Layouts and pipelines, built once per device from the declarations.
-pub struct Pipelines {
-    device: wgpu::Device,
-    layouts: HashMap<&'static str, wgpu::BindGroupLayout>,
-    modules: HashMap<&'static str, wgpu::ShaderModule>,
-    /// By pass, entry point and the frame mode it was specialised for (if it was).
-    compute: HashMap<(&'static str, &'static str, Option<u32>), wgpu::ComputePipeline>,
-    /// By pass and variant (the pass's own key for the constants it was built with).
-    render: HashMap<(&'static str, u32), wgpu::RenderPipeline>,
-}
-
-impl Pipelines {
-    pub fn new(device: &wgpu::Device) -> Pipelines {
-        Pipelines {
-            device: device.clone(),
-            layouts: HashMap::new(),
-            modules: HashMap::new(),
-            compute: HashMap::new(),
-            render: HashMap::new(),
-        }
-    }
-
-    pub fn layout(&mut self, decl: &PassDecl) -> wgpu::BindGroupLayout {
-        let device = &self.device;
-        self.layouts
-            .entry(decl.label)
-            .or_insert_with(|| gpu::layout(device, decl.label, &decl.layout_entries()))
-            .clone()
-    }
-
-    pub fn module(&mut self, decl: &PassDecl) -> wgpu::ShaderModule {
-        let device = &self.device;
-        self.modules
-            .entry(decl.label)
-            .or_insert_with(|| gpu::shader(device, decl.label, decl.shader))
-            .clone()
-    }
-
-    /// The compute pipeline of one entry point; `label` names it (timers use the pass label).
-    pub fn compute(
-        &mut self,
-        decl: &PassDecl,
-        entry: &'static str,
-        label: &'static str,
-    ) -> wgpu::ComputePipeline {
-        self.compute_for(decl, entry, label, None)
-    }
-
-    /// The pipeline of `entry`, specialised for the frame mode `mode` when there is one: its
-    /// mode bits are then constants (`SPECIALISED_MODE` in common.wgsl), one pipeline per mode
-    /// met, built on first use.
-    pub fn compute_for(
-        &mut self,
-        decl: &PassDecl,
-        entry: &'static str,
-        label: &'static str,
-        mode: Option<u32>,
-    ) -> wgpu::ComputePipeline {
-        let key = (decl.label, entry, mode);
-        if let Some(p) = self.compute.get(&key) {
-            return p.clone();
-        }
-        // Modes come from client settings: past a handful per entry point, the general
-        // pipeline serves the rest rather than the cache growing with every combination.
-        let specialised =
-            |k: &&(&str, &str, Option<u32>)| k.0 == decl.label && k.1 == entry && k.2.is_some();
-        if mode.is_some() && self.compute.keys().filter(specialised).count() >= MAX_SPECIALISED {
-            return self.compute_for(decl, entry, label, None);
-        }
-        let layout = self.layout(decl);
-        let module = self.module(decl);
-        let constants: Vec<(&str, f64)> = mode
-            .map(|m| ("SPECIALISED_MODE", f64::from(m)))
-            .into_iter()
-            .collect();
-        let p = gpu::compute_pipeline(&self.device, label, &module, entry, &layout, &constants);
-        self.compute.insert(key, p.clone());
-        p
-    }
-}
-
-impl Pipelines {
-    /// A raster pass's pipeline, built by `build` from the pass's layout and shader module on
-    /// first use of this `variant` (a pass that specialises its shader per scene numbers the
-    /// constant sets it builds; others pass 0).
-    pub fn render(
-        &mut self,
-        decl: &PassDecl,
-        variant: u32,
-        build: impl FnOnce(
-            &wgpu::Device,
-            &wgpu::BindGroupLayout,
-            &wgpu::ShaderModule,
-        ) -> wgpu::RenderPipeline,
-    ) -> wgpu::RenderPipeline {
-        let key = (decl.label, variant);
-        if let Some(p) = self.render.get(&key) {
-            return p.clone();
-        }
-        let layout = self.layout(decl);
-        let module = self.module(decl);
-        let p = build(&self.device, &layout, &module);
-        self.render.insert(key, p.clone());
-        p
-    }
-}
-
 /// One dispatch inside a compute pass.
 pub struct Dispatch {
     pub pipeline: wgpu::ComputePipeline,
@@ -369,6 +261,8 @@ pub struct Recorder<'a> {
     pub size: (u32, u32),
     /// The frame's MODE_* bits, as its uniforms hold them.
     pub mode: u32,
+    /// The kinds of material the scene has (`materials::KIND_*` bits).
+    pub scene_kinds: u32,
 }
 
 impl Recorder<'_> {
@@ -432,7 +326,22 @@ impl Recorder<'_> {
         entry: &'static str,
         size: DispatchSize,
     ) -> Result<Dispatch, GraphError> {
-        self.dispatch_mode(decl, entry, size, None)
+        self.dispatch_mode(decl, entry, size, Specialised::default())
+    }
+
+    /// A dispatch whose pipeline is specialised for the kinds of material the scene has (the
+    /// shader's `SCENE_KINDS`): the branches of kinds it has none of are compiled out.
+    pub fn dispatch_for_scene(
+        &mut self,
+        decl: &PassDecl,
+        entry: &'static str,
+        size: DispatchSize,
+    ) -> Result<Dispatch, GraphError> {
+        let by = Specialised {
+            scene_kinds: Some(self.scene_kinds),
+            ..Default::default()
+        };
+        self.dispatch_mode(decl, entry, size, by)
     }
 
     /// A dispatch whose pipeline is specialised for this frame's mode bits: branches on modes
@@ -444,7 +353,11 @@ impl Recorder<'_> {
         entry: &'static str,
         size: DispatchSize,
     ) -> Result<Dispatch, GraphError> {
-        self.dispatch_mode(decl, entry, size, Some(self.mode))
+        let by = Specialised {
+            mode: Some(self.mode),
+            ..Default::default()
+        };
+        self.dispatch_mode(decl, entry, size, by)
     }
 
     fn dispatch_mode(
@@ -452,11 +365,11 @@ impl Recorder<'_> {
         decl: &PassDecl,
         entry: &'static str,
         size: DispatchSize,
-        mode: Option<u32>,
+        by: Specialised,
     ) -> Result<Dispatch, GraphError> {
         let label = if entry == "main" { decl.label } else { entry };
         Ok(Dispatch {
-            pipeline: self.pipelines.compute_for(decl, entry, label, mode),
+            pipeline: self.pipelines.compute_for(decl, entry, label, by),
             bind_group: self.bind_group(decl)?,
             offsets: Vec::new(),
             size,

@@ -131,6 +131,25 @@ pub fn gpu_materials(scene: &Scene, plan: Option<&Plan>) -> Vec<GpuMaterial> {
         .collect()
 }
 
+/// Bits of the kinds of material a scene has (`SCENE_KINDS` in the shading shader); a bit
+/// per `GpuMaterial::kind` value.
+pub const KIND_OPAQUE: u32 = 1;
+pub const KIND_TRANSLUCENT: u32 = 2;
+pub const KIND_EMITTER: u32 = 4;
+
+/// The kinds of material `scene` has, as `KIND_*` bits: shading compiles out the others.
+pub fn kinds(scene: &Scene) -> u32 {
+    scene
+        .materials
+        .iter()
+        .map(|(_, m)| match m {
+            Material::Opaque { .. } => KIND_OPAQUE,
+            Material::Translucent { .. } => KIND_TRANSLUCENT,
+            Material::Emitter { .. } => KIND_EMITTER,
+        })
+        .fold(0, |all, k| all | k)
+}
+
 pub fn upload(device: &wgpu::Device, label: &str, materials: &[GpuMaterial]) -> wgpu::Buffer {
     device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
         label: Some(label),
@@ -162,5 +181,22 @@ mod tests {
             // Header, eight vec4 fields, the lobe table's eight vec4s, the lobe's averages.
             16 + 8 * 16 + 8 * 16 + 16
         );
+    }
+
+    #[test]
+    fn a_scene_names_the_kinds_of_material_it_has_and_no_others() {
+        use super::{kinds, KIND_EMITTER, KIND_OPAQUE, KIND_TRANSLUCENT};
+        let of = |name| kinds(&crate::scene::Scene::builtin(name).expect("builtin scene"));
+        assert_eq!(of("opaque"), KIND_OPAQUE);
+        // One translucent bunny on the background, no floor.
+        assert_eq!(of("bunny-marble"), KIND_TRANSLUCENT);
+        assert_eq!(of("cornell"), KIND_OPAQUE | KIND_TRANSLUCENT | KIND_EMITTER);
+        // Each bit is the one `GpuMaterial::kind` value the shader tests it against.
+        for (kind, bit) in [KIND_OPAQUE, KIND_TRANSLUCENT, KIND_EMITTER]
+            .iter()
+            .enumerate()
+        {
+            assert_eq!(*bit, 1 << kind);
+        }
     }
 }

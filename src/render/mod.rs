@@ -25,6 +25,7 @@ mod inspect;
 pub mod lights;
 pub mod materials;
 pub mod pass;
+mod pipelines;
 mod renderer;
 mod request;
 mod scene_gpu;

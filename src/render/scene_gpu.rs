@@ -12,6 +12,8 @@ use crate::scene::Scene;
 pub struct SceneGpu {
     pub scene: Scene,
     pub mesh: MeshBuffers,
+    /// The kinds of material it has (`materials::KIND_*`), for the shading pipeline.
+    pub kinds: u32,
     pub photons: Option<PhotonMap>,
     /// The key and punctual lights' shadow maps (`shadow.depth`, `shadow.atlas` in `resources`),
     /// when the plan has shadows.
@@ -112,6 +114,7 @@ impl SceneGpu {
         tracing::info!(scene = %scene.name(), triangles = scene.mesh.triangle_count(), translucent = scene.has_translucency(), "scene loaded");
         let radiosity = start_radiosity(&scene);
         Ok(SceneGpu {
+            kinds: super::materials::kinds(&scene),
             scene,
             mesh,
             photons,

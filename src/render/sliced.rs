@@ -255,6 +255,7 @@ impl Renderer {
             timer: &mut self.timer,
             size: (req.width, req.height),
             mode: t.mode,
+            scene_kinds: sg.kinds,
         };
         match part {
             Part::Whole => frame::record(&mut recorder, &plan, &sg.mesh)?,

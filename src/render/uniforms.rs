@@ -85,6 +85,9 @@ pub fn constants() -> Vec<(&'static str, u32)> {
             probability_form_id(ProbabilityForm::Density),
         ),
         ("NO_SEED", crate::foveation::reconstruct::NO_SEED),
+        ("KIND_OPAQUE", super::materials::KIND_OPAQUE),
+        ("KIND_TRANSLUCENT", super::materials::KIND_TRANSLUCENT),
+        ("KIND_EMITTER", super::materials::KIND_EMITTER),
     ]
 }
 
