@@ -263,6 +263,8 @@ pub struct Recorder<'a> {
     pub mode: u32,
     /// The kinds of material the scene has (`materials::KIND_*` bits).
     pub scene_kinds: u32,
+    /// The frame's translucency rung (`Rung::id`), as its uniforms hold it.
+    pub rung: u32,
 }
 
 impl Recorder<'_> {
@@ -329,8 +331,9 @@ impl Recorder<'_> {
         self.dispatch_mode(decl, entry, size, Specialised::default())
     }
 
-    /// A dispatch whose pipeline is specialised for the kinds of material the scene has (the
-    /// shader's `SCENE_KINDS`): the branches of kinds it has none of are compiled out.
+    /// A dispatch whose pipeline is specialised for the kinds of material the scene has and
+    /// the frame's translucency rung (the shader's `SCENE_KINDS`, `FRAME_RUNG`): the branches
+    /// of other kinds and rungs are compiled out.
     pub fn dispatch_for_scene(
         &mut self,
         decl: &PassDecl,
@@ -339,6 +342,7 @@ impl Recorder<'_> {
     ) -> Result<Dispatch, GraphError> {
         let by = Specialised {
             scene_kinds: Some(self.scene_kinds),
+            rung: Some(self.rung),
             ..Default::default()
         };
         self.dispatch_mode(decl, entry, size, by)

@@ -10,15 +10,16 @@ use super::graph::PassDecl;
 /// Pipelines one entry point may have specialised for different frame modes.
 pub const MAX_SPECIALISED: usize = 8;
 
-type ComputeKey = (&'static str, &'static str, Option<u32>, Option<u32>);
+type ComputeKey = (&'static str, &'static str, Specialised);
 
-/// What a compute pipeline is specialised for: the frame's mode bits (`SPECIALISED_MODE` in
-/// common.wgsl) and the kinds of material the scene has (`SCENE_KINDS`, a pass that declares
-/// it), each when given.
-#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+/// What a compute pipeline is specialised for, each when given: the frame's mode bits
+/// (`SPECIALISED_MODE` in common.wgsl), and for the shading pass the kinds of material the
+/// scene has (`SCENE_KINDS`) and the frame's translucency rung (`FRAME_RUNG`).
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Hash)]
 pub struct Specialised {
     pub mode: Option<u32>,
     pub scene_kinds: Option<u32>,
+    pub rung: Option<u32>,
 }
 
 /// Layouts and pipelines, built once per device from the declarations.
@@ -81,11 +82,11 @@ impl Pipelines {
         label: &'static str,
         by: Specialised,
     ) -> wgpu::ComputePipeline {
-        let key = (decl.label, entry, by.mode, by.scene_kinds);
+        let key = (decl.label, entry, by);
         if let Some(p) = self.compute.get(&key) {
             return p.clone();
         }
-        let specialised = |k: &&ComputeKey| k.0 == decl.label && k.1 == entry && k.2.is_some();
+        let specialised = |k: &&ComputeKey| k.0 == decl.label && k.1 == entry && k.2.mode.is_some();
         if by.mode.is_some() && self.compute.keys().filter(specialised).count() >= MAX_SPECIALISED {
             let general = Specialised { mode: None, ..by };
             return self.compute_for(decl, entry, label, general);
@@ -95,6 +96,7 @@ impl Pipelines {
         let constants: Vec<(&str, f64)> = [
             by.mode.map(|m| ("SPECIALISED_MODE", f64::from(m))),
             by.scene_kinds.map(|k| ("SCENE_KINDS", f64::from(k))),
+            by.rung.map(|r| ("FRAME_RUNG", f64::from(r))),
         ]
         .into_iter()
         .flatten()

@@ -256,6 +256,7 @@ impl Renderer {
             size: (req.width, req.height),
             mode: t.mode,
             scene_kinds: sg.kinds,
+            rung: req.settings.translucency.rung.id(),
         };
         match part {
             Part::Whole => frame::record(&mut recorder, &plan, &sg.mesh)?,
