@@ -1,4 +1,4 @@
-//! Pipelines specialised for a frame's mode bits (`graph::Recorder::dispatch_specialised`): a
+//! Pipelines specialised for a frame's mode bits (`graph::Recorder::by_mode`): a
 //! stream whose settings change between frames gets the new mode's pipeline, and the
 //! still-camera reprojection those bits select reuses what the general test would.
 

@@ -328,43 +328,32 @@ impl Recorder<'_> {
         entry: &'static str,
         size: DispatchSize,
     ) -> Result<Dispatch, GraphError> {
-        self.dispatch_mode(decl, entry, size, Specialised::default())
+        self.dispatch_by(decl, entry, size, Specialised::default())
     }
 
-    /// A dispatch whose pipeline is specialised for the kinds of material the scene has and
-    /// the frame's translucency rung (the shader's `SCENE_KINDS`, `FRAME_RUNG`): the branches
-    /// of other kinds and rungs are compiled out.
-    pub fn dispatch_for_scene(
-        &mut self,
-        decl: &PassDecl,
-        entry: &'static str,
-        size: DispatchSize,
-    ) -> Result<Dispatch, GraphError> {
-        let by = Specialised {
+    /// Specialised for this frame's mode bits: branches on modes the frame is not in cost
+    /// nothing, which on a software adapter, where all of a shader's code shapes its cost,
+    /// measured a third off the sampling pass (docs/foveation.md).
+    pub fn by_mode(&self) -> Specialised {
+        Specialised {
+            mode: Some(self.mode),
+            ..Default::default()
+        }
+    }
+
+    /// Specialised for the kinds of material the scene has and the frame's translucency rung
+    /// (the shading shader's `SCENE_KINDS`, `FRAME_RUNG`): other kinds' and rungs' branches
+    /// are compiled out.
+    pub fn by_scene(&self) -> Specialised {
+        Specialised {
             scene_kinds: Some(self.scene_kinds),
             rung: Some(self.rung),
             ..Default::default()
-        };
-        self.dispatch_mode(decl, entry, size, by)
+        }
     }
 
-    /// A dispatch whose pipeline is specialised for this frame's mode bits: branches on modes
-    /// the frame is not in cost nothing, which on a software adapter, where all of a shader's
-    /// code shapes its cost, measured a third off the sampling pass (docs/foveation.md).
-    pub fn dispatch_specialised(
-        &mut self,
-        decl: &PassDecl,
-        entry: &'static str,
-        size: DispatchSize,
-    ) -> Result<Dispatch, GraphError> {
-        let by = Specialised {
-            mode: Some(self.mode),
-            ..Default::default()
-        };
-        self.dispatch_mode(decl, entry, size, by)
-    }
-
-    fn dispatch_mode(
+    /// A dispatch whose pipeline is specialised as `by` says.
+    pub fn dispatch_by(
         &mut self,
         decl: &PassDecl,
         entry: &'static str,

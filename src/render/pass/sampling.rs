@@ -33,7 +33,7 @@ pub const PASS: PassDecl = PassDecl {
 pub fn record(f: &mut Recorder) -> Result<(), GraphError> {
     let (w, h) = f.size;
     let groups = DispatchSize::Groups(w.div_ceil(16), h.div_ceil(16), 1);
-    let d = f.dispatch_specialised(&PASS, "main", groups)?;
+    let d = f.dispatch_by(&PASS, "main", groups, f.by_mode())?;
     f.compute(PASS.label, &[d]);
     Ok(())
 }

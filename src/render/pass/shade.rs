@@ -63,7 +63,12 @@ fn coarse_dispatch(f: &mut Recorder, first: u32, end: u32) -> Result<Dispatch, G
 /// Shades the listed pixels; the workgroup count comes from `compact.counter[1..4]`.
 pub fn record_list(f: &mut Recorder) -> Result<(), GraphError> {
     let counter = f.buffer("compact.counter")?.clone();
-    let d = f.dispatch_for_scene(&PASS, "shade_list", DispatchSize::Indirect(counter, 4))?;
+    let d = f.dispatch_by(
+        &PASS,
+        "shade_list",
+        DispatchSize::Indirect(counter, 4),
+        f.by_scene(),
+    )?;
     f.compute(PASS.label, &[d]);
     Ok(())
 }
@@ -75,7 +80,7 @@ pub fn record_grid(f: &mut Recorder, coarse: bool) -> Result<(), GraphError> {
     if coarse {
         dispatches.push(coarse_dispatch(f, 0, f.size.1)?);
     }
-    dispatches.push(f.dispatch_for_scene(&PASS, "shade_grid", DispatchSize::Frame)?);
+    dispatches.push(f.dispatch_by(&PASS, "shade_grid", DispatchSize::Frame, f.by_scene())?);
     f.compute(PASS.label, &dispatches);
     Ok(())
 }
@@ -87,7 +92,7 @@ pub fn record_rows(f: &mut Recorder, first: u32, end: u32, coarse: bool) -> Resu
     if coarse {
         dispatches.push(coarse_dispatch(f, first, end)?);
     }
-    let mut d = f.dispatch_for_scene(&PASS, "shade_grid", DispatchSize::Frame)?;
+    let mut d = f.dispatch_by(&PASS, "shade_grid", DispatchSize::Frame, f.by_scene())?;
     d.size = DispatchSize::Groups(
         f.size.0.div_ceil(8),
         end.saturating_sub(first).div_ceil(8),
