@@ -199,11 +199,11 @@ pub enum Preset {
     Reference,
     /// Every pixel shaded with the frame's shading.
     Full,
-    /// Foveated, linear probability, ξ = 0.1.
+    /// Foveated, linear probability, ξ = 0.1, pull-push reconstruction.
     Quality,
     /// Foveated, density probability, ξ = 0.05, pull-push reconstruction: the default.
     Balanced,
-    /// Foveated, steeper MAR, ξ = 0.02, nearest-sample reconstruction, a coarser cut.
+    /// Foveated, steeper MAR, ξ = 0.02, pull-push reconstruction, a coarser cut.
     Fast,
 }
 
