@@ -131,23 +131,16 @@ pub fn gpu_materials(scene: &Scene, plan: Option<&Plan>) -> Vec<GpuMaterial> {
         .collect()
 }
 
-/// Bits of the kinds of material a scene has (`SCENE_KINDS` in the shading shader); a bit
-/// per `GpuMaterial::kind` value.
+/// Bits of the kinds of material a scene has (`SCENE_KINDS` in the shading shader): bit
+/// `1 << kind` per `GpuMaterial::kind` value.
 pub const KIND_OPAQUE: u32 = 1;
 pub const KIND_TRANSLUCENT: u32 = 2;
 pub const KIND_EMITTER: u32 = 4;
 
-/// The kinds of material `scene` has, as `KIND_*` bits: shading compiles out the others.
-pub fn kinds(scene: &Scene) -> u32 {
-    scene
-        .materials
-        .iter()
-        .map(|(_, m)| match m {
-            Material::Opaque { .. } => KIND_OPAQUE,
-            Material::Translucent { .. } => KIND_TRANSLUCENT,
-            Material::Emitter { .. } => KIND_EMITTER,
-        })
-        .fold(0, |all, k| all | k)
+/// The kinds of material in `materials`, as `KIND_*` bits: shading compiles out the others.
+/// Taken from the materials the shader reads, so the two cannot disagree.
+pub fn kinds(materials: &[GpuMaterial]) -> u32 {
+    materials.iter().fold(0, |all, m| all | 1 << m.kind)
 }
 
 pub fn upload(device: &wgpu::Device, label: &str, materials: &[GpuMaterial]) -> wgpu::Buffer {
@@ -186,7 +179,10 @@ mod tests {
     #[test]
     fn a_scene_names_the_kinds_of_material_it_has_and_no_others() {
         use super::{kinds, KIND_EMITTER, KIND_OPAQUE, KIND_TRANSLUCENT};
-        let of = |name| kinds(&crate::scene::Scene::builtin(name).expect("builtin scene"));
+        let of = |name| {
+            let scene = crate::scene::Scene::builtin(name).expect("builtin scene");
+            kinds(&super::gpu_materials(&scene, None))
+        };
         assert_eq!(of("opaque"), KIND_OPAQUE);
         // One translucent bunny on the background, no floor.
         assert_eq!(of("bunny-marble"), KIND_TRANSLUCENT);

@@ -38,11 +38,8 @@ impl SceneGpu {
     ) -> Result<SceneGpu, GraphError> {
         fits_the_device(&scene, &device.limits())?;
         let mesh = gbuffer::upload(device, &scene);
-        let materials = super::materials::upload(
-            device,
-            "materials.scene",
-            &super::materials::gpu_materials(&scene, None),
-        );
+        let gpu_materials = super::materials::gpu_materials(&scene, None);
+        let materials = super::materials::upload(device, "materials.scene", &gpu_materials);
         // The shadow maps first: the photon pass tests its photons against the key light's.
         let mut maps = Resources::default();
         let shadow = if crate::scene::Plan::of(&scene, 1, 1).shadows {
@@ -114,7 +111,7 @@ impl SceneGpu {
         tracing::info!(scene = %scene.name(), triangles = scene.mesh.triangle_count(), translucent = scene.has_translucency(), "scene loaded");
         let radiosity = start_radiosity(&scene);
         Ok(SceneGpu {
-            kinds: super::materials::kinds(&scene),
+            kinds: super::materials::kinds(&gpu_materials),
             scene,
             mesh,
             photons,

@@ -204,6 +204,7 @@ impl Renderer {
             .queue
             .write_buffer(buffer, 0, bytemuck::bytes_of(&uniform));
         self.targets[ti].1.mode = uniform.mode;
+        self.targets[ti].1.rung = uniform.rung;
         Ok(())
     }
 
@@ -256,7 +257,7 @@ impl Renderer {
             size: (req.width, req.height),
             mode: t.mode,
             scene_kinds: sg.kinds,
-            rung: req.settings.translucency.rung.id(),
+            rung: t.rung,
         };
         match part {
             Part::Whole => frame::record(&mut recorder, &plan, &sg.mesh)?,

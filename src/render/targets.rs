@@ -52,6 +52,8 @@ pub struct FrameTargets {
     pub prev_settings: Option<crate::settings::RenderSettings>,
     /// The MODE_* bits of the frame uniforms last written (specialised pipelines follow them).
     pub mode: u32,
+    /// The translucency rung of the frame uniforms last written (shading is specialised for it).
+    pub rung: u32,
     /// The scene plan at this size gives some material its subsurface rungs.
     pub needs_dipole: bool,
     /// What these targets take on the GPU, bytes ([`FrameTargets::bytes_for`]).
@@ -223,6 +225,7 @@ impl FrameTargets {
             frame_index: 0,
             prev_settings: None,
             mode: 0,
+            rung: 0,
             needs_dipole,
             bytes: FrameTargets::bytes_for(width, height),
         }
