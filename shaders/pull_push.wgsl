@@ -1,7 +1,6 @@
-// Pull-push reconstruction (seed 000's hierarchical interpolation on the foveated samples):
-// first-order moments pulled up a pyramid of 2×2 cells, planes pushed back down, every pixel
-// without a sample filled from the blend of its four level-1 planes, on colour over what the
-// G-buffer predicts (`proxy`). CPU twin and the reasoning: foveation::pull_push.
+// Pull-push reconstruction (seed 000's hierarchical interpolation): moments pulled up a pyramid
+// of 2×2 cells, planes pushed back down, each pixel without a sample filled from its four level-1
+// planes, on colour over the G-buffer's prediction (`proxy`). CPU twin: foveation::pull_push.
 
 // The shaded colour, filled in place where a pixel has no sample.
 @group(0) @binding(1) var<storage, read_write> color: array<vec4<f32>>;
@@ -16,6 +15,8 @@
 @group(0) @binding(7) var moments_in: texture_2d_array<f32>;
 @group(0) @binding(8) var planes_in: texture_2d_array<f32>;
 @group(0) @binding(9) var<storage, read_write> planes_staged: array<vec4<f32>>;
+// The fill's workgroups, the tiles with a pixel to fill (pull_push_tiles.wgsl).
+@group(0) @binding(11) var<storage, read> tiles: array<u32>;
 
 // One dispatch: this level's size and corner in its atlas, and its neighbour's (pull: below).
 struct Level {
@@ -30,8 +31,7 @@ struct Level {
     floor: f32,
     depth_tolerance: f32,
     material_tolerance: f32,
-    // Texels a row of the staging buffers holds at this level.
-    row: u32,
+    row: u32, // texels a row of the staging buffers holds at this level
 }
 @group(0) @binding(5) var<uniform> level: Level;
 
@@ -326,11 +326,10 @@ fn coarse_plane(par: Parents, centre: vec2<f32>, l: u32, key: vec2<f32>) -> Cell
     return blend_end(acc, aim);
 }
 
-// A push invocation does 2×2 quads of cells, ids 2·id + (0|1, 0|1). A quad's cells
-// (2·q − 1) + (0|1, 0|1) share their parents (q − 1) + (0|1, 0|1) (a cell's centre lies a
-// quarter of a parent inside its bilinear square); four quads' parents are 3×3 planes, read
-// once: 36 texels for 16 cells, where a cell at a time read 256 (15 of the fill's ~40 ms at
-// 720p on lavapipe). Looping over the quads or sharing parents in workgroup memory was slower.
+// A push invocation does 2×2 quads of cells, ids 2·id + (0|1, 0|1). A quad's cells (2·q − 1) +
+// (0|1, 0|1) share their parents (q − 1) + (0|1, 0|1) (a cell's centre lies a quarter of a parent
+// inside its bilinear square); four quads' parents are 3×3 planes, read once: 36 texels for 16
+// cells, not 256. Looping over the quads or sharing parents in workgroup memory was slower.
 fn quad_origin(q: vec2<u32>) -> vec2<i32> {
     return vec2<i32>(q) * 2 - 1;
 }
@@ -387,9 +386,8 @@ fn push_quad(o: vec2<i32>, par: Parents, kind: u32) {
     }
 }
 
-// `v` at a level-`l` centre (a pixel or an empty level-1 cell) inside its parents' square, not
-// at the border: within their own values per channel (a linear ratio there stays so). CPU
-// twin: foveation::pull_push::within_corners.
+// `v` at a level-`l` centre (a pixel, an empty level-1 cell) inside its parents' square, off the
+// border: within their values per channel. CPU twin: foveation::pull_push::within_corners.
 fn within_corners(v: vec3<f32>, par: Parents, centre: vec2<f32>, l: u32) -> vec3<f32> {
     let b = parent_base(centre, l).xy;
     if (any(b < vec2<f32>(0.0)) || any(b + 1.0 >= vec2<f32>(level.near_size))) {
@@ -471,10 +469,12 @@ fn push_cell(c: vec2<i32>, par: Parents, kind: u32) {
     store_plane(vec2<u32>(c), out);
 }
 
-// Every pixel without a sample: level 1's planes times its proxy.
+// Every pixel without a sample: level 1's planes times its proxy. Only the listed workgroups
+// run (the rest have no such pixel); each is the one a full dispatch would have at the tile.
 @compute @workgroup_size(8, 8)
-fn push_pixels(@builtin(global_invocation_id) id: vec3<u32>) {
-    push_block(id.xy * 2u, PUSH_PIXELS);
+fn push_pixels(@builtin(workgroup_id) g: vec3<u32>, @builtin(local_invocation_id) l: vec3<u32>) {
+    let t = tiles[g.x];
+    push_block((vec2<u32>(t & 0xFFFFu, t >> 16u) * 8u + l.xy) * 2u, PUSH_PIXELS);
 }
 
 fn push_pixel(p: vec2<i32>, par: Parents) {

@@ -332,13 +332,15 @@ fn planes_do_not_reach_across_a_material_boundary() {
 fn pull_push_on_the_gpu_matches_its_cpu_twin() {
     use fovea::foveation::pull_push;
     let mut r = renderer();
-    // Odd, non-power-of-two sizes, the gaze off centre, and a frame of a single pixel; the last
-    // frame, inside the Cornell box, has no background: every cell of every level counts.
+    // Odd, non-power-of-two sizes, the gaze off centre, and a frame of a single pixel; inside
+    // the Cornell box no background: every cell of every level counts. The last frame's fill
+    // skips its tiles of background (pull_push_tiles).
     for (stream, name, (w, h), gaze) in [
         (1, "bunny", (97, 61), [0.3, 0.4]),
         (2, "bunny", (64, 48), [0.9, 0.1]),
         (3, "bunny", (1, 1), [0.5, 0.5]),
         (4, "cornell", (150, 113), [0.9, 0.85]),
+        (5, "bunny", (333, 250), [0.2, 0.7]),
     ] {
         let scene = Scene::builtin(name).unwrap();
         let mut req = foveated("balanced", w, h, gaze);

@@ -10,8 +10,8 @@
 use super::graph::{GraphError, PassDecl, Recorder};
 use super::pass::gbuffer::MeshBuffers;
 use super::pass::{
-    compact, dof, gbuffer, i420, jfa, low_pass, output, photons, pull_push, pyramid, resolve,
-    sampling, screen_diffusion, shade, shadow,
+    compact, dof, gbuffer, i420, jfa, low_pass, output, photons, pull_push, pull_push_tiles,
+    pyramid, resolve, sampling, screen_diffusion, shade, shadow,
 };
 use super::request::MIN_XI;
 use crate::foveation::reconstruct::frame_jfa_steps;
@@ -19,7 +19,7 @@ use crate::settings::{Reconstruction, RenderSettings, Rung};
 
 /// Every pass the renderer has, in the order a frame meets them (shadow, photons and pyramid run
 /// once per static scene, before the frame that first needs them).
-pub const PASSES: [&PassDecl; 15] = [
+pub const PASSES: [&PassDecl; 16] = [
     &shadow::PASS,
     &photons::PASS,
     &pyramid::PASS,
@@ -30,6 +30,7 @@ pub const PASSES: [&PassDecl; 15] = [
     &shade::PASS,
     &jfa::PASS,
     &resolve::PASS,
+    &pull_push_tiles::PASS,
     &pull_push::PASS,
     &dof::PASS,
     &output::PASS,

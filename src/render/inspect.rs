@@ -1,8 +1,8 @@
 //! Reading a stream's intermediate images back for tests and diagnostics.
 
 use super::frame::RECONSTRUCTED;
-use super::pass::jfa;
 use super::pass::photons::SIDE as PHOTON_SIDE;
+use super::pass::{jfa, pull_push_tiles};
 use super::renderer::Renderer;
 use super::request::Inspection;
 use super::targets::map_read;
@@ -78,6 +78,10 @@ impl Renderer {
                 }
                 None => Vec::new(),
             },
+            fill_tiles: u32s(buf(pull_push_tiles::ARGS)?)
+                .first()
+                .copied()
+                .unwrap_or(0),
         })
     }
 }

@@ -139,4 +139,6 @@ pub struct Inspection {
     pub albedo: Vec<[u8; 4]>,
     /// Photons (pyramid level 0) as [x, y, z, extent, Φr, Φg, Φb, weight]; empty without any.
     pub photons: Vec<[f32; 8]>,
+    /// Workgroups (32×32 tiles) the last pull-push fill ran: its indirect dispatch's count.
+    pub fill_tiles: u32,
 }

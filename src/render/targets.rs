@@ -6,7 +6,7 @@
 use std::collections::HashMap;
 
 use super::graph::{BindKey, Resources, Routes};
-use super::pass::{gbuffer, i420, jfa, low_pass, pull_push, shade};
+use super::pass::{gbuffer, i420, jfa, low_pass, pull_push, pull_push_tiles, shade};
 use super::uniforms::FrameUniform;
 use super::RenderError;
 use crate::foveation::reconstruct::jfa_steps;
@@ -81,8 +81,10 @@ fn textures() -> [(&'static str, wgpu::TextureFormat, wgpu::TextureUsages); 8] {
 }
 
 /// The buffers sized by the frame (or by nothing): (name, bytes, usage).
-fn sized_buffers(width: u32, height: u32) -> [(&'static str, u64, wgpu::BufferUsages); 8] {
+fn sized_buffers(width: u32, height: u32) -> [(&'static str, u64, wgpu::BufferUsages); 11] {
     let uniform = B::UNIFORM | B::COPY_DST;
+    let (marks, tiles) = pull_push_tiles::bytes(width, height);
+    let cleared = B::STORAGE | B::COPY_DST | B::COPY_SRC;
     [
         // `[count, workgroups x, y, z, band start, 0, 0, 0]`: compact.wgsl.
         (
@@ -122,6 +124,9 @@ fn sized_buffers(width: u32, height: u32) -> [(&'static str, u64, wgpu::BufferUs
             low_pass::pyramid_bytes(width, height),
             B::STORAGE,
         ),
+        (pull_push_tiles::MARKS, marks, cleared),
+        (pull_push_tiles::ARGS, 12, cleared | B::INDIRECT),
+        (pull_push_tiles::TILES, tiles, B::STORAGE),
     ]
 }
 
@@ -240,6 +245,8 @@ impl FrameTargets {
             + 4;
         u64::from(width) * u64::from(height) * per_pixel
             + pull_push::pyramid_bytes(width, height)
+            + pull_push_tiles::bytes(width, height).0
+            + pull_push_tiles::bytes(width, height).1
             + shade::coarse_bytes(width, height)
             + low_pass::pyramid_bytes(width, height)
             + 2 * 4 * i420::words(width, height)

@@ -11,6 +11,7 @@ pub mod low_pass;
 pub mod output;
 pub mod photons;
 pub mod pull_push;
+pub mod pull_push_tiles;
 pub mod pyramid;
 pub mod resolve;
 pub mod sampling;

@@ -18,6 +18,7 @@ use crate::render::graph::{
     dynamic_uniform, layers, read, texture, uniform, write, DispatchSize, GraphError, PassDecl,
     Recorder,
 };
+use crate::render::pass::pull_push_tiles;
 
 /// Uniform slots start at multiples of the device's offset alignment (256 by default).
 pub const SLOT: u64 = 256;
@@ -65,6 +66,7 @@ pub const PASS: PassDecl = PassDecl {
         layers("pull_push.planes_in"),
         write(PLANES_STAGED),
         write(MOMENTS_STAGED[1]),
+        read(pull_push_tiles::TILES),
     ],
     attachments: &[],
     entry_points: &["pull_pixels", "pull", "push", "push_level1", "push_pixels"],
@@ -278,12 +280,19 @@ pub fn record(f: &mut Recorder, part: Option<u32>) -> Result<(), GraphError> {
     if range.is_empty() {
         return Ok(());
     }
+    if range.start == 0 {
+        pull_push_tiles::record(f)?;
+    }
     let mut dispatches = Vec::with_capacity(range.len());
     for i in range.clone() {
         let (entry, s) = &slots[i];
         route(f, s.level, entry.starts_with("pull"));
         let [w, h] = dispatch_cells(entry, s.size);
-        let size = DispatchSize::Groups(w.div_ceil(8), h.div_ceil(8), 1);
+        let size = if *entry == "push_pixels" {
+            DispatchSize::Indirect(f.buffer(pull_push_tiles::ARGS)?.clone(), 0)
+        } else {
+            DispatchSize::Groups(w.div_ceil(8), h.div_ceil(8), 1)
+        };
         let mut d = f.dispatch(&PASS, entry, size)?;
         d.offsets = vec![(i as u64 * SLOT) as u32];
         dispatches.push(d);

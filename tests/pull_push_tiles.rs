@@ -1,0 +1,61 @@
+//! The pixel fill runs only the tiles with a pixel to fill: the GPU's list against its CPU twin
+//! (`pass::pull_push_tiles::needed`) on frames with background, reused samples and a fully
+//! sampled one. That the listed fill leaves every pixel as the full one would is checked in
+//! tests/pull_push.rs (the GPU against the reconstruction's CPU twin, on a frame with tiles
+//! of background).
+
+mod common;
+
+use common::frames::{foveated, inspect, renderer};
+use fovea::render::pass::pull_push_tiles::{fill_grid, needed};
+use fovea::render::uniforms::{FLAG_COVERED, FLAG_REUSED, FLAG_SAMPLED};
+use fovea::settings::Reconstruction;
+
+#[test]
+fn the_fill_lists_the_tiles_its_cpu_twin_does_and_skips_the_background() {
+    let mut r = renderer();
+    for (stream, scene, (w, h), frames) in [
+        (1, "bunny", (333, 250), 1),
+        // A second frame reuses last frame's samples: fewer pixels need filling.
+        (2, "bunny-marble", (401, 301), 3),
+        (3, "gallery", (257, 190), 2),
+    ] {
+        let mut req = foveated("balanced", w, h, [0.3, 0.6]);
+        req.scene = scene.to_string();
+        req.stream = stream;
+        req.settings.foveation.reconstruction = Reconstruction::PullPush;
+        for _ in 0..frames {
+            r.render(&req).unwrap();
+        }
+        let img = inspect(&r, &req);
+        let want = needed(w, h, &img.flags);
+        assert_eq!(
+            img.fill_tiles, want,
+            "{scene} {w}x{h}: listed against the twin"
+        );
+        let (gx, gy) = fill_grid(w, h);
+        let to_fill = |f: &u32| f & FLAG_COVERED != 0 && f & (FLAG_SAMPLED | FLAG_REUSED) == 0;
+        assert!(img.flags.iter().any(to_fill), "{scene}: nothing to fill");
+        assert!(
+            want > 0 && want < gx * gy,
+            "{scene} {w}x{h}: {want} of {} tiles listed; the background needs none",
+            gx * gy
+        );
+    }
+}
+
+#[test]
+fn a_frame_with_every_pixel_sampled_lists_no_tile() {
+    let mut r = renderer();
+    let mut req = foveated("balanced", 96, 64, [0.5, 0.5]);
+    req.settings.foveation.reconstruction = Reconstruction::PullPush;
+    // Every pixel's probability clamped to 1: all are shaded, none is filled.
+    req.settings.foveation.min_probability = 1.0;
+    r.render(&req).unwrap();
+    let img = inspect(&r, &req);
+    assert!(img
+        .flags
+        .iter()
+        .all(|f| f & FLAG_COVERED == 0 || f & FLAG_SAMPLED != 0));
+    assert_eq!(img.fill_tiles, 0);
+}
