@@ -82,7 +82,14 @@ pub struct BenchRecord {
 }
 
 /// The passes a foveated frame adds to a full one: choosing, listing and reconstructing samples.
-pub const FOVEATION_PASSES: [&str; 5] = ["sampling", "compact", "jfa", "resolve", "pull_push"];
+pub const FOVEATION_PASSES: [&str; 6] = [
+    "sampling",
+    "compact",
+    "jfa",
+    "resolve",
+    "pull_push_tiles",
+    "pull_push",
+];
 
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Machine {
@@ -342,7 +349,7 @@ impl BenchReport {
 
 /// Frame order of the passes a frame records (`render/frame.rs`), for the per-pass tables;
 /// a pass not named here sorts after them.
-const PASS_ORDER: [&str; 13] = [
+const PASS_ORDER: [&str; 14] = [
     "shadow",
     "photons",
     "pyramid",
@@ -351,6 +358,7 @@ const PASS_ORDER: [&str; 13] = [
     "compact",
     "jfa",
     "resolve",
+    "pull_push_tiles",
     "pull_push",
     "shade",
     "screen_diffusion",
