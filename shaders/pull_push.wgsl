@@ -7,15 +7,14 @@
 @group(0) @binding(2) var<storage, read> flags: array<u32>;
 @group(0) @binding(3) var albedo_tex: texture_2d<f32>;
 @group(0) @binding(6) var normal_distance: texture_2d<f32>;
-// The pyramid is read from textures (a software adapter loads buffers one lane at a time), two
-// atlases (odd, even levels; `_in` routed per dispatch); a dispatch writes its level to staging
-// buffers (a storage texture's store costs seven times a buffer's), copied into the atlas.
+// The pyramid is read from two texture atlases (odd, even levels; `_in` routed per dispatch);
+// a dispatch writes its level to staging buffers, copied into the atlas (pass/pull_push.rs).
 @group(0) @binding(4) var<storage, read_write> moments_staged: array<vec4<f32>>;
 @group(0) @binding(10) var<storage, read_write> moments_staged_hi: array<vec4<f32>>;
 @group(0) @binding(7) var moments_in: texture_2d_array<f32>;
 @group(0) @binding(8) var planes_in: texture_2d_array<f32>;
 @group(0) @binding(9) var<storage, read_write> planes_staged: array<vec4<f32>>;
-// The fill's workgroups, the tiles with a pixel to fill (pull_push_tiles.wgsl).
+// Workgroups the pixel-level dispatches run (pull_push_tiles.wgsl): fill's even, pull's odd.
 @group(0) @binding(11) var<storage, read> tiles: array<u32>;
 
 // One dispatch: this level's size and corner in its atlas, and its neighbour's (pull: below).
@@ -25,8 +24,7 @@ struct Level {
     near_size: vec2<u32>,
     near_origin: vec2<u32>,
     level: u32,
-    // 1 when the level above exists (push), else the top cell leans on nothing.
-    has_parent: u32,
+    has_parent: u32, // 1 when the level above exists (push): the top cell leans on nothing
     ridge: f32,
     floor: f32,
     depth_tolerance: f32,
@@ -50,7 +48,7 @@ fn empty_cell() -> Cell {
     return Cell(z, 0.0, vec2<f32>(0.0), z, z, z, 0.0, BIG, -BIG, 0.0, 0.0, 0.0);
 }
 
-// The moments of the cell at atlas texel `q`.
+// The moments of the cell at atlas texel `q`; all zeros (a tile `pull_pixels` skipped) is empty.
 fn load_cell(q: vec2<u32>) -> Cell {
     let p = vec2<i32>(q);
     let a = textureLoad(moments_in, p, 0, 0);
@@ -59,7 +57,8 @@ fn load_cell(q: vec2<u32>) -> Cell {
     let d = textureLoad(moments_in, p, 3, 0);
     let e = textureLoad(moments_in, p, 4, 0);
     let m = textureLoad(moments_in, p, 5, 0).x;
-    return Cell(a.rgb, a.a, b.xy, vec3<f32>(b.z, b.w, c.a), c.rgb, d.rgb, d.a, e.x, e.y, e.z, e.w, m);
+    let range = select(vec2<f32>(BIG, -BIG), e.xy, a.a > 0.0);
+    return Cell(a.rgb, a.a, b.xy, vec3<f32>(b.z, b.w, c.a), c.rgb, d.rgb, d.a, range.x, range.y, e.z, e.w, m);
 }
 
 // This level's cell `c`, its moments to the staging buffers.
@@ -84,9 +83,8 @@ fn store_plane(c: vec2<u32>, v: Cell) {
     planes_staged[i + 3u * n] = vec4<f32>(v.lo, v.hi, v.material, v.depth_var);
 }
 
-// What the G-buffer (`nd`, `albedo`) alone predicts of a pixel's colour: the key light's Lambert
-// term with the ambient, on the albedo, plus the floor. Colour / proxy is interpolated, so
-// texture and normal detail come back per pixel, and only what the proxy misses.
+// What the G-buffer alone predicts of a pixel's colour: the key light's Lambert term with the
+// ambient, on the albedo, plus the floor; colour / proxy is what is interpolated.
 fn proxy(nd: vec4<f32>, albedo: vec4<f32>) -> vec3<f32> {
     return lambert(nd.xyz, albedo.rgb) + level.floor;
 }
@@ -154,8 +152,7 @@ fn add_means(out: ptr<function, Cell>, ch: Cell) {
     (*out).c += k * ch.c;
 }
 
-// A child's spreads about the merged means: depth and material variance, position scatter and
-// the position-colour cross terms.
+// A child's spreads about the merged means: depth, material, position, position × colour.
 fn add_spreads(out: ptr<function, Cell>, ch: Cell) {
     if (ch.w <= 0.0) {
         return;
@@ -180,13 +177,19 @@ fn level1_cell(q: vec2<u32>, bound: vec2<u32>) -> Cell {
     }
     let p = vec2<i32>(2u * q);
     let x = vec2<i32>(1, 0);
-    let y = vec2<i32>(0, 1);
-    return merge(pixel_cell(p), pixel_cell(p + x), pixel_cell(p + y), pixel_cell(p + x + y));
+    return merge(pixel_cell(p), pixel_cell(p + x), pixel_cell(p + x.yx), pixel_cell(p + 1));
 }
 
-// Pull, level 2 (its `near` level is level 1) from the pixels: a cell's four level-1 cells.
+// The invocation a full dispatch would have in the workgroup listed at `tiles[i]`.
+fn listed(i: u32, local: vec3<u32>) -> vec2<u32> {
+    return vec2<u32>(tiles[i] & 0xFFFFu, tiles[i] >> 16u) * 8u + local.xy;
+}
+
+// Pull, level 2 (its `near` level is level 1) from the pixels: a cell's four level-1 cells. Only
+// workgroups with a sample run; the rest of the staging buffers stay zero (an empty cell).
 @compute @workgroup_size(8, 8)
-fn pull_pixels(@builtin(global_invocation_id) id: vec3<u32>) {
+fn pull_pixels(@builtin(workgroup_id) g: vec3<u32>, @builtin(local_invocation_id) l: vec3<u32>) {
+    let id = listed(2u * g.x + 1u, l);
     if (any(id.xy >= level.size)) {
         return;
     }
@@ -327,9 +330,8 @@ fn coarse_plane(par: Parents, centre: vec2<f32>, l: u32, key: vec2<f32>) -> Cell
 }
 
 // A push invocation does 2×2 quads of cells, ids 2·id + (0|1, 0|1). A quad's cells (2·q − 1) +
-// (0|1, 0|1) share their parents (q − 1) + (0|1, 0|1) (a cell's centre lies a quarter of a parent
-// inside its bilinear square); four quads' parents are 3×3 planes, read once: 36 texels for 16
-// cells, not 256. Looping over the quads or sharing parents in workgroup memory was slower.
+// (0|1, 0|1) share their parents (q − 1) + (0|1, 0|1); four quads' parents are 3×3 planes, read
+// once: 36 texels for 16 cells, not 256 (looping over quads, or workgroup memory, was slower).
 fn quad_origin(q: vec2<u32>) -> vec2<i32> {
     return vec2<i32>(q) * 2 - 1;
 }
@@ -469,12 +471,10 @@ fn push_cell(c: vec2<i32>, par: Parents, kind: u32) {
     store_plane(vec2<u32>(c), out);
 }
 
-// Every pixel without a sample: level 1's planes times its proxy. Only the listed workgroups
-// run (the rest have no such pixel); each is the one a full dispatch would have at the tile.
+// Every pixel without a sample: level 1's planes times its proxy; only workgroups with one.
 @compute @workgroup_size(8, 8)
 fn push_pixels(@builtin(workgroup_id) g: vec3<u32>, @builtin(local_invocation_id) l: vec3<u32>) {
-    let t = tiles[g.x];
-    push_block((vec2<u32>(t & 0xFFFFu, t >> 16u) * 8u + l.xy) * 2u, PUSH_PIXELS);
+    push_block(listed(2u * g.x, l) * 2u, PUSH_PIXELS);
 }
 
 fn push_pixel(p: vec2<i32>, par: Parents) {

@@ -1,15 +1,17 @@
-// Which tiles pull-push's pixel fill runs (CPU twin: pass::pull_push_tiles::needed). The fill
-// writes only covered pixels without a sample, so a fill workgroup (32×32 pixels) with none is
-// left out of its indirect dispatch: the background and the fully sampled fovea cost nothing
-// there. A software adapter runs a branch for every row of lanes whether or not one takes
-// it; only a workgroup not dispatched is free.
+// Which tiles pull-push's two pixel-level dispatches run (CPU twin: pass::pull_push_tiles::
+// needed). The fill writes only covered pixels without a sample, so a fill workgroup (32×32
+// pixels from pixel −1) with none is left out of its indirect dispatch; the pull from the
+// pixels merges only pixels that hold a sample, so its workgroup (32×32 pixels from pixel 0)
+// with none would store only empty cells, which the cleared staging buffers hold already. A
+// software adapter runs a branch for every row of lanes whether or not one takes it; only a
+// workgroup not dispatched is free.
 
 @group(0) @binding(1) var<storage, read> flags: array<u32>;
-// One word per fill workgroup: 1 where one of its pixels needs filling (cleared each frame).
+// Two words per fill workgroup, 1 where needed (cleared each frame): the fill's, the pull's.
 @group(0) @binding(2) var<storage, read_write> marks: array<u32>;
-// The fill's indirect dispatch arguments (x, y, z).
-@group(0) @binding(3) var<storage, read_write> args: array<atomic<u32>, 3>;
-// The listed workgroups, packed x | y << 16.
+// Indirect dispatch arguments (x, y, z): the fill's, then the pull's.
+@group(0) @binding(3) var<storage, read_write> args: array<atomic<u32>, 6>;
+// The listed workgroups, packed x | y << 16: the fill's at even indices, the pull's at odd.
 @group(0) @binding(4) var<storage, read_write> tiles: array<u32>;
 
 // The fill's workgroups along a side of `n` pixels: an invocation per two 2×2 quads of pixels,
@@ -22,7 +24,13 @@ fn fill_grid() -> vec2<u32> {
     return vec2<u32>(push_groups(frame.width), push_groups(frame.height));
 }
 
-// As the fill's invocations: the 4×4 pixels from 4·id − 1, so a workgroup is one fill tile.
+// The pull's workgroups: a level-2 cell (4×4 pixels) an invocation, 8×8 a group.
+fn pull_grid() -> vec2<u32> {
+    return (vec2<u32>(frame.width, frame.height) + 31u) / 32u;
+}
+
+// As the fill's invocations: pixels 4·id − 1 … 4·id + 2 are the fill's (a workgroup is one
+// fill tile), 4·id … 4·id + 3 the pull's (a workgroup is one pull tile): one 5×5 read.
 @compute @workgroup_size(8, 8)
 fn mark(@builtin(global_invocation_id) id: vec3<u32>) {
     let grid = fill_grid();
@@ -30,33 +38,49 @@ fn mark(@builtin(global_invocation_id) id: vec3<u32>) {
         return;
     }
     let o = vec2<i32>(id.xy) * 4 - 1;
-    var need = false;
-    for (var y = 0; y < 4; y++) {
-        for (var x = 0; x < 4; x++) {
+    var fill = false;
+    var pull = false;
+    for (var y = 0; y < 5; y++) {
+        for (var x = 0; x < 5; x++) {
             let p = o + vec2<i32>(x, y);
             if (in_frame(p)) {
                 let f = flags[index_of(p)];
+                let covered = (f & FLAG_COVERED) != 0u;
                 let sample = (f & (FLAG_SAMPLED | FLAG_REUSED)) != 0u;
-                need = need || ((f & FLAG_COVERED) != 0u && !sample);
+                fill = fill || (covered && !sample && x < 4 && y < 4);
+                pull = pull || (covered && sample && x > 0 && y > 0);
             }
         }
     }
-    if (need) {
-        let t = id.xy / 8u;
-        marks[t.y * grid.x + t.x] = 1u;
+    let t = id.xy / 8u;
+    let i = 2u * (t.y * grid.x + t.x);
+    if (fill) {
+        marks[i] = 1u;
+    }
+    if (pull) {
+        marks[i + 1u] = 1u;
     }
 }
 
-// One invocation per fill tile: listed where marked.
+// One invocation per fill tile (the pull's grid is never wider or taller): listed where marked.
 @compute @workgroup_size(8, 8)
 fn list(@builtin(global_invocation_id) id: vec3<u32>) {
     let grid = fill_grid();
     if (all(id.xy == vec2<u32>(0u))) {
-        atomicStore(&args[1], 1u);
-        atomicStore(&args[2], 1u);
+        for (var k = 0; k < 2; k++) {
+            atomicStore(&args[3 * k + 1], 1u);
+            atomicStore(&args[3 * k + 2], 1u);
+        }
     }
-    if (any(id.xy >= grid) || marks[id.y * grid.x + id.x] == 0u) {
+    if (any(id.xy >= grid)) {
         return;
     }
-    tiles[atomicAdd(&args[0], 1u)] = id.x | (id.y << 16u);
+    let i = 2u * (id.y * grid.x + id.x);
+    let packed = id.x | (id.y << 16u);
+    if (marks[i] != 0u) {
+        tiles[2u * atomicAdd(&args[0], 1u)] = packed;
+    }
+    if (all(id.xy < pull_grid()) && marks[i + 1u] != 0u) {
+        tiles[2u * atomicAdd(&args[3], 1u) + 1u] = packed;
+    }
 }

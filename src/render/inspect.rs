@@ -39,6 +39,7 @@ impl Renderer {
             .get(scene)
             .and_then(|s| s.photons.as_ref())
             .and_then(|m| m.nodes());
+        let tile_args = u32s(buf(pull_push_tiles::ARGS)?);
         Ok(Inspection {
             probability: f32s(buf("sampling.probability")?),
             flags: u32s(buf("sampling.flags")?),
@@ -78,10 +79,8 @@ impl Renderer {
                 }
                 None => Vec::new(),
             },
-            fill_tiles: u32s(buf(pull_push_tiles::ARGS)?)
-                .first()
-                .copied()
-                .unwrap_or(0),
+            fill_tiles: tile_args.first().copied().unwrap_or(0),
+            pull_tiles: tile_args.get(3).copied().unwrap_or(0),
         })
     }
 }

@@ -139,6 +139,8 @@ pub struct Inspection {
     pub albedo: Vec<[u8; 4]>,
     /// Photons (pyramid level 0) as [x, y, z, extent, Φr, Φg, Φb, weight]; empty without any.
     pub photons: Vec<[f32; 8]>,
-    /// Workgroups (32×32 tiles) the last pull-push fill ran: its indirect dispatch's count.
+    /// Workgroups (32×32 tiles) the last pull-push ran, from its indirect dispatches' counts:
+    /// the fill's and the pull from the pixels'.
     pub fill_tiles: u32,
+    pub pull_tiles: u32,
 }

@@ -125,7 +125,7 @@ fn sized_buffers(width: u32, height: u32) -> [(&'static str, u64, wgpu::BufferUs
             B::STORAGE,
         ),
         (pull_push_tiles::MARKS, marks, cleared),
-        (pull_push_tiles::ARGS, 12, cleared | B::INDIRECT),
+        (pull_push_tiles::ARGS, 24, cleared | B::INDIRECT),
         (pull_push_tiles::TILES, tiles, B::STORAGE),
     ]
 }
@@ -166,7 +166,10 @@ fn pyramid(device: &wgpu::Device, r: &mut Resources, width: u32, height: u32) {
         let staging = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some(name),
             size: bytes,
-            usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
+            // Cleared each frame: zeros are the empty cells of the pull's skipped tiles.
+            usage: wgpu::BufferUsages::STORAGE
+                | wgpu::BufferUsages::COPY_SRC
+                | wgpu::BufferUsages::COPY_DST,
             mapped_at_creation: false,
         });
         r.buffer(name, staging);

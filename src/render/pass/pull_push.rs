@@ -288,10 +288,16 @@ pub fn record(f: &mut Recorder, part: Option<u32>) -> Result<(), GraphError> {
         let (entry, s) = &slots[i];
         route(f, s.level, entry.starts_with("pull"));
         let [w, h] = dispatch_cells(entry, s.size);
-        let size = if *entry == "push_pixels" {
-            DispatchSize::Indirect(f.buffer(pull_push_tiles::ARGS)?.clone(), 0)
-        } else {
-            DispatchSize::Groups(w.div_ceil(8), h.div_ceil(8), 1)
+        let listed = |offset| {
+            Ok(DispatchSize::Indirect(
+                f.buffer(pull_push_tiles::ARGS)?.clone(),
+                offset,
+            ))
+        };
+        let size = match *entry {
+            "push_pixels" => listed(0)?,
+            "pull_pixels" => listed(pull_push_tiles::PULL_ARGS)?,
+            _ => DispatchSize::Groups(w.div_ceil(8), h.div_ceil(8), 1),
         };
         let mut d = f.dispatch(&PASS, entry, size)?;
         d.offsets = vec![(i as u64 * SLOT) as u32];

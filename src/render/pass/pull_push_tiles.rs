@@ -1,11 +1,14 @@
-//! Which workgroups pull-push's pixel fill runs: only 32×32 tiles with a covered pixel
-//! without a sample, dispatched indirectly from a list. On the software adapter a workgroup
-//! costs the same whether or not its lanes find work, so the background and the fully sampled
-//! fovea were paid for in full. The fill's output is unchanged: a tile left out has nothing to
+//! Which workgroups pull-push's two pixel-level dispatches run, each dispatched indirectly
+//! from a list: the fill only on 32×32 tiles with a covered pixel without a sample, the pull
+//! from the pixels only on tiles with a sample (its other cells are empty, and the staging
+//! buffers it writes are cleared first, zeros being an empty cell). On the software adapter a
+//! workgroup costs the same whether or not its lanes find work, so the background and the
+//! fully sampled fovea were paid for in full. Output unchanged: a tile left out has nothing to
 //! write. (Level 1's push listed the same way, only where the fill reads its planes, came out
 //! slower than pushing every cell: 99–107 against 67–69 ms for all of pull-push at 1280×720.)
 
 use crate::render::graph::{read, uniform, write, DispatchSize, GraphError, PassDecl, Recorder};
+use crate::render::pass::pull_push::MOMENTS_STAGED;
 use crate::render::uniforms::{FLAG_COVERED, FLAG_REUSED, FLAG_SAMPLED};
 
 pub const MARKS: &str = "pull_push.tile_marks";
@@ -38,34 +41,53 @@ pub fn fill_grid(width: u32, height: u32) -> (u32, u32) {
     (push_groups(width), push_groups(height))
 }
 
-/// Bytes of the marks and of the list (a word a fill tile each).
+/// The pull's workgroups (one per 32×32 tile of pixels, from pixel 0): never more along a
+/// side than the fill's.
+pub fn pull_grid(width: u32, height: u32) -> (u32, u32) {
+    (width.div_ceil(32), height.div_ceil(32))
+}
+
+/// Byte offset of the pull's indirect arguments in [`ARGS`] (the fill's are at 0).
+pub const PULL_ARGS: u64 = 12;
+
+/// Bytes of the marks and of the lists (two words a fill tile each).
 pub fn bytes(width: u32, height: u32) -> (u64, u64) {
     let (x, y) = fill_grid(width, height);
     let tiles = u64::from(x.max(1)) * u64::from(y.max(1));
-    (4 * tiles, 4 * tiles)
+    (8 * tiles, 8 * tiles)
 }
 
-/// CPU twin of the shader: how many workgroups the fill lists for these per-pixel flags.
-pub fn needed(width: u32, height: u32, flags: &[u32]) -> u32 {
+/// CPU twin of the shader: how many workgroups the fill and the pull list for these
+/// per-pixel flags.
+pub fn needed(width: u32, height: u32, flags: &[u32]) -> (u32, u32) {
     let (gx, gy) = fill_grid(width, height);
-    let mut marks = vec![false; (gx * gy) as usize];
+    let (px, py) = pull_grid(width, height);
+    let mut fill = vec![false; (gx * gy) as usize];
+    let mut pull = vec![false; (px * py) as usize];
     for y in 0..height {
         for x in 0..width {
             let f = flags[(y * width + x) as usize];
-            if f & FLAG_COVERED != 0 && f & (FLAG_SAMPLED | FLAG_REUSED) == 0 {
-                // Tile k holds pixels 32k − 1 … 32k + 30.
-                marks[((y + 1) / 32 * gx + (x + 1) / 32) as usize] = true;
+            let sample = f & (FLAG_SAMPLED | FLAG_REUSED) != 0;
+            if f & FLAG_COVERED != 0 && !sample {
+                // Fill tile k holds pixels 32k − 1 … 32k + 30.
+                fill[((y + 1) / 32 * gx + (x + 1) / 32) as usize] = true;
+            }
+            if f & FLAG_COVERED != 0 && sample {
+                pull[(y / 32 * px + x / 32) as usize] = true;
             }
         }
     }
-    marks.iter().filter(|&&m| m).count() as u32
+    let count = |m: &[bool]| m.iter().filter(|&&m| m).count() as u32;
+    (count(&fill), count(&pull))
 }
 
-/// Marks the tiles and lists them, before pull-push (its own timed pass).
+/// Marks the tiles and lists them, before pull-push (its own timed pass; the clears are
+/// timed with the frame only).
 pub fn record(f: &mut Recorder) -> Result<(), GraphError> {
     let (w, h) = f.size;
     let (gx, gy) = fill_grid(w, h);
-    for name in [MARKS, ARGS] {
+    // The marks and counts start at zero, and the pull's staging buffers at empty cells.
+    for name in [MARKS, ARGS, MOMENTS_STAGED[0], MOMENTS_STAGED[1]] {
         let b = f.buffer(name)?.clone();
         f.encoder.clear_buffer(&b, 0, None);
     }
@@ -97,29 +119,47 @@ mod tests {
     }
 
     #[test]
-    fn a_frame_needing_no_fill_lists_nothing_and_each_pixel_lists_its_own_tile() {
+    fn each_pixel_lists_its_own_tiles_and_a_frame_without_work_lists_none() {
         let (w, h) = (200, 130);
-        let mut flags = vec![FLAG_COVERED | FLAG_SAMPLED; (w * h) as usize];
-        assert_eq!(needed(w, h, &flags), 0);
+        let (gx, gy) = fill_grid(w, h);
+        let (px, py) = pull_grid(w, h);
+        assert!(px <= gx && py <= gy, "the pull's grid fits in the fill's");
+        let mut flags = vec![0; (w * h) as usize];
+        assert_eq!(needed(w, h, &flags), (0, 0), "background needs neither");
+        flags
+            .iter_mut()
+            .for_each(|f| *f = FLAG_COVERED | FLAG_SAMPLED);
+        assert_eq!(
+            needed(w, h, &flags),
+            (0, px * py),
+            "every pixel sampled: no fill"
+        );
         flags
             .iter_mut()
             .for_each(|f| *f = FLAG_COVERED | FLAG_REUSED);
-        assert_eq!(needed(w, h, &flags), 0, "reused samples need no fill");
+        assert_eq!(
+            needed(w, h, &flags),
+            (0, px * py),
+            "reused samples count as samples"
+        );
+        flags.iter_mut().for_each(|f| *f = FLAG_COVERED);
+        assert_eq!(
+            needed(w, h, &flags),
+            (gx * gy, 0),
+            "no sample: nothing to pull"
+        );
+        // Fill tiles start at pixel −1, pull tiles at 0: (30, 30) and (0, 0) share both,
+        // (31, 31) is in fill tile (1, 1) and pull tile (0, 0), (32, 32) in (1, 1) of both.
         flags.iter_mut().for_each(|f| *f = 0);
-        assert_eq!(needed(w, h, &flags), 0, "background needs no fill");
-        // Tiles start at pixel −1: (30, 30) and (0, 0) share tile (0, 0), (31, 31) is in (1, 1).
         for (x, y) in [(30, 30), (0, 0)] {
             flags[(y * w + x) as usize] = FLAG_COVERED;
         }
-        assert_eq!(needed(w, h, &flags), 1);
+        assert_eq!(needed(w, h, &flags), (1, 0));
         flags[(31 * w + 31) as usize] = FLAG_COVERED;
-        assert_eq!(needed(w, h, &flags), 2);
-        flags.iter_mut().for_each(|f| *f = FLAG_COVERED);
-        let (gx, gy) = fill_grid(w, h);
-        assert_eq!(
-            needed(w, h, &flags),
-            gx * gy,
-            "every tile of an unsampled frame"
-        );
+        assert_eq!(needed(w, h, &flags), (2, 0));
+        flags[(31 * w + 31) as usize] = FLAG_COVERED | FLAG_SAMPLED;
+        assert_eq!(needed(w, h, &flags), (1, 1));
+        flags[(32 * w + 32) as usize] = FLAG_COVERED | FLAG_REUSED;
+        assert_eq!(needed(w, h, &flags), (1, 2));
     }
 }
