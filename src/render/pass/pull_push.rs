@@ -4,7 +4,8 @@
 //! The pyramid is kept in two texture atlases (odd and even levels); see the shader for why.
 //! Each dispatch writes its level to a staging buffer that is then copied into the atlas: on
 //! the software adapter a buffer store costs a seventh of a storage-texture store, and a copy
-//! is a memcpy.
+//! is a memcpy. The two dispatches at the pixels (the pull from them, the fill) run only the
+//! tiles `pull_push_tiles` lists.
 //! CPU twin: `foveation::pull_push`.
 
 use bytemuck::{Pod, Zeroable};
