@@ -9,6 +9,7 @@ use serde::{Deserialize, Serialize};
 use crate::protocol::{Codec, Display};
 use crate::quality::Errors;
 use crate::render::cost::WORTH_SAVING;
+use crate::render::frame::PASSES;
 use crate::settings::RenderSettings;
 
 /// Median and 10th/90th percentiles (nearest rank) of a set of samples.
@@ -347,25 +348,6 @@ impl BenchReport {
     }
 }
 
-/// Frame order of the passes a frame records (`render/frame.rs`), for the per-pass tables;
-/// a pass not named here sorts after them.
-const PASS_ORDER: [&str; 14] = [
-    "shadow",
-    "photons",
-    "pyramid",
-    "gbuffer",
-    "sampling",
-    "compact",
-    "jfa",
-    "resolve",
-    "pull_push_tiles",
-    "pull_push",
-    "shade",
-    "screen_diffusion",
-    "dof",
-    "output",
-];
-
 impl BenchReport {
     /// Per group: every pass's median GPU ms under each configuration, the frame, and the
     /// overhead beside the ideal, so a change to one pass is measured on that pass.
@@ -382,11 +364,12 @@ impl BenchReport {
         for (_, rows) in groups {
             let r0 = rows[0];
             let mut passes: Vec<&String> = rows.iter().flat_map(|r| r.passes_ms.keys()).collect();
+            // Frame order, as `render::frame::PASSES` declares the passes; others after them.
             let rank = |p: &str| {
-                PASS_ORDER
+                PASSES
                     .iter()
-                    .position(|q| *q == p)
-                    .unwrap_or(PASS_ORDER.len())
+                    .position(|q| q.label == p)
+                    .unwrap_or(PASSES.len())
             };
             passes.sort_by(|a, b| rank(a).cmp(&rank(b)).then(a.cmp(b)));
             passes.dedup();
