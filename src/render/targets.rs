@@ -246,10 +246,11 @@ impl FrameTargets {
         let per_pixel: u64 = textures().iter().map(|t| texel(t.1)).sum::<u64>()
             + PER_PIXEL.iter().map(|p| p.1).sum::<u64>()
             + 4;
+        let tile_bytes = pull_push_tiles::bytes(width, height);
         u64::from(width) * u64::from(height) * per_pixel
             + pull_push::pyramid_bytes(width, height)
-            + pull_push_tiles::bytes(width, height).0
-            + pull_push_tiles::bytes(width, height).1
+            + tile_bytes.0
+            + tile_bytes.1
             + shade::coarse_bytes(width, height)
             + low_pass::pyramid_bytes(width, height)
             + 2 * 4 * i420::words(width, height)

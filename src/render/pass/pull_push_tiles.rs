@@ -8,7 +8,6 @@
 //! slower than pushing every cell: 99–107 against 67–69 ms for all of pull-push at 1280×720.)
 
 use crate::render::graph::{read, uniform, write, DispatchSize, GraphError, PassDecl, Recorder};
-use crate::render::pass::pull_push::MOMENTS_STAGED;
 use crate::render::uniforms::{FLAG_COVERED, FLAG_REUSED, FLAG_SAMPLED};
 
 pub const MARKS: &str = "pull_push.tile_marks";
@@ -81,13 +80,11 @@ pub fn needed(width: u32, height: u32, flags: &[u32]) -> (u32, u32) {
     (count(&fill), count(&pull))
 }
 
-/// Marks the tiles and lists them, before pull-push (its own timed pass; the clears are
-/// timed with the frame only).
+/// Marks the tiles and lists them, before pull-push (its own timed pass).
 pub fn record(f: &mut Recorder) -> Result<(), GraphError> {
     let (w, h) = f.size;
     let (gx, gy) = fill_grid(w, h);
-    // The marks and counts start at zero, and the pull's staging buffers at empty cells.
-    for name in [MARKS, ARGS, MOMENTS_STAGED[0], MOMENTS_STAGED[1]] {
+    for name in [MARKS, ARGS] {
         let b = f.buffer(name)?.clone();
         f.encoder.clear_buffer(&b, 0, None);
     }
