@@ -14,7 +14,7 @@
 @group(0) @binding(7) var moments_in: texture_2d_array<f32>;
 @group(0) @binding(8) var planes_in: texture_2d_array<f32>;
 @group(0) @binding(9) var<storage, read_write> planes_staged: array<vec4<f32>>;
-// Workgroups the pixel-level dispatches run (pull_push_tiles.wgsl): fill's even, pull's odd.
+// Workgroups three dispatches run (pull_push_tiles.wgsl): fill 3i, pull 3i + 1, level 1 3i + 2.
 @group(0) @binding(11) var<storage, read> tiles: array<u32>;
 
 // One dispatch: this level's size and corner in its atlas, and its neighbour's (pull: below).
@@ -189,7 +189,7 @@ fn listed(i: u32, local: vec3<u32>) -> vec2<u32> {
 // workgroups with a sample run; the rest of the staging buffers stay zero (an empty cell).
 @compute @workgroup_size(8, 8)
 fn pull_pixels(@builtin(workgroup_id) g: vec3<u32>, @builtin(local_invocation_id) l: vec3<u32>) {
-    let id = listed(2u * g.x + 1u, l);
+    let id = listed(3u * g.x + 1u, l);
     if (any(id.xy >= level.size)) {
         return;
     }
@@ -410,10 +410,10 @@ fn push(@builtin(global_invocation_id) id: vec3<u32>) {
     push_block(id.xy * 2u, PUSH_CELLS);
 }
 
-// Push, level 1: as `push`, its moments from the pixels (level 1 is never stored).
+// Push, level 1: as `push`, its moments from the pixels (never stored); where the fill reads it.
 @compute @workgroup_size(8, 8)
-fn push_level1(@builtin(global_invocation_id) id: vec3<u32>) {
-    push_block(id.xy * 2u, PUSH_LEVEL1);
+fn push_level1(@builtin(workgroup_id) g: vec3<u32>, @builtin(local_invocation_id) l: vec3<u32>) {
+    push_block(listed(3u * g.x + 2u, l) * 2u, PUSH_LEVEL1);
 }
 
 fn push_cell(c: vec2<i32>, par: Parents, kind: u32) {
@@ -474,7 +474,7 @@ fn push_cell(c: vec2<i32>, par: Parents, kind: u32) {
 // Every pixel without a sample: level 1's planes times its proxy; only workgroups with one.
 @compute @workgroup_size(8, 8)
 fn push_pixels(@builtin(workgroup_id) g: vec3<u32>, @builtin(local_invocation_id) l: vec3<u32>) {
-    push_block(listed(2u * g.x, l) * 2u, PUSH_PIXELS);
+    push_block(listed(3u * g.x, l) * 2u, PUSH_PIXELS);
 }
 
 fn push_pixel(p: vec2<i32>, par: Parents) {

@@ -81,6 +81,7 @@ impl Renderer {
             },
             fill_tiles: tile_args.first().copied().unwrap_or(0),
             pull_tiles: tile_args.get(3).copied().unwrap_or(0),
+            level1_tiles: tile_args.get(6).copied().unwrap_or(0),
         })
     }
 }

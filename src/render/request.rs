@@ -139,8 +139,9 @@ pub struct Inspection {
     pub albedo: Vec<[u8; 4]>,
     /// Photons (pyramid level 0) as [x, y, z, extent, Φr, Φg, Φb, weight]; empty without any.
     pub photons: Vec<[f32; 8]>,
-    /// Workgroups (32×32 tiles) the last pull-push ran, from its indirect dispatches' counts:
-    /// the fill's and the pull from the pixels'.
+    /// Workgroups the last pull-push ran, from its indirect dispatches' counts: the fill's and
+    /// the pull from the pixels' (32×32 pixels each), level 1's push (32×32 cells).
     pub fill_tiles: u32,
     pub pull_tiles: u32,
+    pub level1_tiles: u32,
 }

@@ -125,7 +125,11 @@ fn sized_buffers(width: u32, height: u32) -> [(&'static str, u64, wgpu::BufferUs
             B::STORAGE,
         ),
         (pull_push_tiles::MARKS, marks, cleared),
-        (pull_push_tiles::ARGS, 24, cleared | B::INDIRECT),
+        (
+            pull_push_tiles::ARGS,
+            pull_push_tiles::ARGS_BYTES,
+            cleared | B::INDIRECT,
+        ),
         (pull_push_tiles::TILES, tiles, B::STORAGE),
     ]
 }

@@ -4,8 +4,8 @@
 //! The pyramid is kept in two texture atlases (odd and even levels); see the shader for why.
 //! Each dispatch writes its level to a staging buffer that is then copied into the atlas: on
 //! the software adapter a buffer store costs a seventh of a storage-texture store, and a copy
-//! is a memcpy. The two dispatches at the pixels (the pull from them, the fill) run only the
-//! tiles `pull_push_tiles` lists.
+//! is a memcpy. The three dispatches nearest the pixels (the pull from them, level 1's push,
+//! the fill) run only the tiles `pull_push_tiles` lists.
 //! CPU twin: `foveation::pull_push`.
 
 use bytemuck::{Pod, Zeroable};
@@ -304,6 +304,7 @@ pub fn record(f: &mut Recorder, part: Option<u32>) -> Result<(), GraphError> {
         let size = match *entry {
             "push_pixels" => listed(0)?,
             "pull_pixels" => listed(pull_push_tiles::PULL_ARGS)?,
+            "push_level1" => listed(pull_push_tiles::LEVEL1_ARGS)?,
             _ => DispatchSize::Groups(w.div_ceil(8), h.div_ceil(8), 1),
         };
         let mut d = f.dispatch(&PASS, entry, size)?;

@@ -1,11 +1,11 @@
-//! Which workgroups pull-push's two pixel-level dispatches run, each dispatched indirectly
-//! from a list: the fill only on 32×32 tiles with a covered pixel without a sample, the pull
-//! from the pixels only on tiles with a sample (its other cells are empty, and the staging
-//! buffers it writes are cleared first, zeros being an empty cell). On the software adapter a
-//! workgroup costs the same whether or not its lanes find work, so the background and the
-//! fully sampled fovea were paid for in full. Output unchanged: a tile left out has nothing to
-//! write. (Level 1's push listed the same way, only where the fill reads its planes, came out
-//! slower than pushing every cell: 99–107 against 67–69 ms for all of pull-push at 1280×720.)
+//! Which workgroups pull-push's three dispatches nearest the pixels run, each dispatched
+//! indirectly from a list: the fill only on 32×32 tiles with a covered pixel without a sample,
+//! the pull from the pixels only on tiles with a sample (its other cells are empty, and the
+//! staging buffers it writes are cleared first, zeros being an empty cell), and level 1's push
+//! only where a listed fill tile reads its planes (nothing else reads them). On the software
+//! adapter a workgroup costs the same whether or not its lanes find work, so the background
+//! and the fully sampled fovea were paid for in full. Output unchanged: a tile left out has
+//! nothing to write that is read.
 
 use crate::render::graph::{read, uniform, write, DispatchSize, GraphError, PassDecl, Recorder};
 use crate::render::uniforms::{FLAG_COVERED, FLAG_REUSED, FLAG_SAMPLED};
@@ -46,19 +46,31 @@ pub fn pull_grid(width: u32, height: u32) -> (u32, u32) {
     (width.div_ceil(32), height.div_ceil(32))
 }
 
-/// Byte offset of the pull's indirect arguments in [`ARGS`] (the fill's are at 0).
-pub const PULL_ARGS: u64 = 12;
+/// Level 1's push's workgroups (one per 32×32 cells of level 1 from cell −1, 64×64 pixels):
+/// the push's grid at level 1's size, never more along a side than the fill's.
+pub fn level1_grid(width: u32, height: u32) -> (u32, u32) {
+    (
+        push_groups(width.div_ceil(2)),
+        push_groups(height.div_ceil(2)),
+    )
+}
 
-/// Bytes of the marks and of the lists (two words a fill tile each).
+/// Byte offsets of the pull's and level 1's indirect arguments in [`ARGS`] (the fill's at 0).
+pub const PULL_ARGS: u64 = 12;
+pub const LEVEL1_ARGS: u64 = 24;
+/// Bytes of [`ARGS`]: three indirect dispatches.
+pub const ARGS_BYTES: u64 = 36;
+
+/// Bytes of the marks (two words a fill tile) and of the lists (three, interleaved).
 pub fn bytes(width: u32, height: u32) -> (u64, u64) {
     let (x, y) = fill_grid(width, height);
     let tiles = u64::from(x.max(1)) * u64::from(y.max(1));
-    (8 * tiles, 8 * tiles)
+    (8 * tiles, 12 * tiles)
 }
 
-/// CPU twin of the shader: how many workgroups the fill and the pull list for these
-/// per-pixel flags.
-pub fn needed(width: u32, height: u32, flags: &[u32]) -> (u32, u32) {
+/// CPU twin of the shader: how many workgroups the fill, the pull and level 1's push list for
+/// these per-pixel flags.
+pub fn needed(width: u32, height: u32, flags: &[u32]) -> (u32, u32, u32) {
     let (gx, gy) = fill_grid(width, height);
     let (px, py) = pull_grid(width, height);
     let mut fill = vec![false; (gx * gy) as usize];
@@ -76,8 +88,23 @@ pub fn needed(width: u32, height: u32, flags: &[u32]) -> (u32, u32) {
             }
         }
     }
+    // Fill tile k reads level-1 cells 16k − 1 … 16k + 15, level 1's workgroup j writes
+    // 32j − 1 … 32j + 30: j runs where a fill tile 2j − 1 … 2j + 1 (each axis) does.
+    let (lx, ly) = level1_grid(width, height);
+    let mut level1 = vec![false; (lx * ly) as usize];
+    for y in 0..gy {
+        for x in 0..gx {
+            if fill[(y * gx + x) as usize] {
+                for j in (x / 2)..=((x + 1) / 2).min(lx.saturating_sub(1)) {
+                    for i in (y / 2)..=((y + 1) / 2).min(ly.saturating_sub(1)) {
+                        level1[(i * lx + j) as usize] = true;
+                    }
+                }
+            }
+        }
+    }
     let count = |m: &[bool]| m.iter().filter(|&&m| m).count() as u32;
-    (count(&fill), count(&pull))
+    (count(&fill), count(&pull), count(&level1))
 }
 
 /// Marks the tiles and lists them, before pull-push (its own timed pass).
@@ -120,15 +147,17 @@ mod tests {
         let (w, h) = (200, 130);
         let (gx, gy) = fill_grid(w, h);
         let (px, py) = pull_grid(w, h);
+        let (lx, ly) = level1_grid(w, h);
         assert!(px <= gx && py <= gy, "the pull's grid fits in the fill's");
+        assert!(lx <= gx && ly <= gy, "level 1's grid fits in the fill's");
         let mut flags = vec![0; (w * h) as usize];
-        assert_eq!(needed(w, h, &flags), (0, 0), "background needs neither");
+        assert_eq!(needed(w, h, &flags), (0, 0, 0), "background needs none");
         flags
             .iter_mut()
             .for_each(|f| *f = FLAG_COVERED | FLAG_SAMPLED);
         assert_eq!(
             needed(w, h, &flags),
-            (0, px * py),
+            (0, px * py, 0),
             "every pixel sampled: no fill"
         );
         flags
@@ -136,27 +165,29 @@ mod tests {
             .for_each(|f| *f = FLAG_COVERED | FLAG_REUSED);
         assert_eq!(
             needed(w, h, &flags),
-            (0, px * py),
+            (0, px * py, 0),
             "reused samples count as samples"
         );
         flags.iter_mut().for_each(|f| *f = FLAG_COVERED);
         assert_eq!(
             needed(w, h, &flags),
-            (gx * gy, 0),
+            (gx * gy, 0, lx * ly),
             "no sample: nothing to pull"
         );
         // Fill tiles start at pixel −1, pull tiles at 0: (30, 30) and (0, 0) share both,
         // (31, 31) is in fill tile (1, 1) and pull tile (0, 0), (32, 32) in (1, 1) of both.
+        // Fill tile 0 reads level-1 cells −1 … 15 (level 1's workgroup 0: −1 … 30), tile 1
+        // cells 15 … 31, in workgroups 0 and 1.
         flags.iter_mut().for_each(|f| *f = 0);
         for (x, y) in [(30, 30), (0, 0)] {
             flags[(y * w + x) as usize] = FLAG_COVERED;
         }
-        assert_eq!(needed(w, h, &flags), (1, 0));
+        assert_eq!(needed(w, h, &flags), (1, 0, 1));
         flags[(31 * w + 31) as usize] = FLAG_COVERED;
-        assert_eq!(needed(w, h, &flags), (2, 0));
+        assert_eq!(needed(w, h, &flags), (2, 0, 4));
         flags[(31 * w + 31) as usize] = FLAG_COVERED | FLAG_SAMPLED;
-        assert_eq!(needed(w, h, &flags), (1, 1));
+        assert_eq!(needed(w, h, &flags), (1, 1, 1));
         flags[(32 * w + 32) as usize] = FLAG_COVERED | FLAG_REUSED;
-        assert_eq!(needed(w, h, &flags), (1, 2));
+        assert_eq!(needed(w, h, &flags), (1, 2, 1));
     }
 }
