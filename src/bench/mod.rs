@@ -9,6 +9,7 @@ mod codec_configs;
 mod codecs;
 mod codecs_report;
 mod configs;
+mod foveation_cost;
 mod ground_truth;
 mod report;
 mod run;
@@ -20,6 +21,7 @@ pub use codecs_report::{
     TARGET,
 };
 pub use configs::{sweep, BenchConfig};
+pub use foveation_cost::bound_vs_full;
 pub use ground_truth::{GroundTruth, GroundTruthError};
 pub use report::{pareto_front, write_reports, BenchRecord, BenchReport, ReferenceTruth, Spread};
 pub use run::{run, BenchOptions, Progress};

@@ -8,8 +8,6 @@ use serde::{Deserialize, Serialize};
 
 use crate::protocol::{Codec, Display};
 use crate::quality::Errors;
-use crate::render::cost::WORTH_SAVING;
-use crate::render::frame::PASSES;
 use crate::settings::RenderSettings;
 
 /// Median and 10th/90th percentiles (nearest rank) of a set of samples.
@@ -74,6 +72,10 @@ pub struct BenchRecord {
     /// The ratio to `full` if a frame cost in proportion to the samples it shades: 1 / shaded.
     #[serde(default)]
     pub ideal_vs_full: Option<f64>,
+    /// The ratio to `full` if foveation's own passes were free and shading cost in proportion
+    /// to the samples shaded, every other pass staying what `full` pays: [`super::bound_vs_full`].
+    #[serde(default)]
+    pub bound_vs_full: Option<f64>,
     /// Medians against the `full` render of the same frame (when `full` is in the sweep): what
     /// foveation costs in quality, apart from the shading model's own error.
     #[serde(default, skip_serializing_if = "Option::is_none")]
@@ -147,9 +149,9 @@ pub struct ReferenceTruth {
     pub errors: Errors,
 }
 
-type GroupKey = (String, u32, u32, [u32; 2]);
+pub(super) type GroupKey = (String, u32, u32, [u32; 2]);
 
-fn group_of(r: &BenchRecord) -> GroupKey {
+pub(super) fn group_of(r: &BenchRecord) -> GroupKey {
     (
         r.scene.clone(),
         r.width,
@@ -203,6 +205,9 @@ impl BenchReport {
                     if let (Some(a), Some(b)) = (f.passes_ms.get("shade"), r.passes_ms.get("shade"))
                     {
                         r.shade_speedup_vs_full = (*b > 0.0).then(|| a / b);
+                    }
+                    if let (Some(a), true) = (f.passes_ms.get("shade"), r.ideal_vs_full.is_some()) {
+                        r.bound_vs_full = super::bound_vs_full(f.frame_ms.median, *a, r.sampled);
                     }
                 }
                 r.pareto = front.contains(&slot);
@@ -295,131 +300,6 @@ impl BenchReport {
                     }
                 }
             }
-        }
-        s
-    }
-}
-
-impl BenchReport {
-    /// Per foveated configuration: what foveation adds, the achieved ratio to `full` beside the
-    /// ideal one, and the quality lost against `full` itself.
-    fn distance_to_ideal(&self) -> String {
-        let rows: Vec<&BenchRecord> = self
-            .records
-            .iter()
-            .filter(|r| r.ideal_vs_full.is_some() && r.speedup_vs_full.is_some())
-            .collect();
-        if rows.is_empty() {
-            return String::new();
-        }
-        let mut s = String::from(
-            "\n## Foveation against full: cost and distance to the ideal\n\n*Overhead* is the GPU time of the passes foveation adds (sampling, compaction, reconstruction), also as a share of `full`'s frame; *ideal* is the ratio if a frame cost in proportion to the pixels it shades (1 / shaded); errors are against the `full` render of the same frame; *server* is what the render thread would do with such frames: foveate them, or shade them whole where foveating saves under 5% (`render::cost::WORTH_SAVING`).\n\n| group | configuration | shaded | overhead ms | overhead / full | achieved | ideal | achieved / ideal | server | PSNR vs full | FLIP vs full | FLIP 5° vs full |\n|---|---|---:|---:|---:|---:|---:|---:|---|---:|---:|---:|\n",
-        );
-        for r in rows {
-            let (achieved, ideal) = (
-                r.speedup_vs_full.unwrap_or(f64::NAN),
-                r.ideal_vs_full.unwrap_or(f64::NAN),
-            );
-            let full_ms = r.frame_ms.median * achieved;
-            let (psnr, flip, flip5) =
-                r.vs_full
-                    .as_ref()
-                    .map_or(("–".into(), "–".into(), "–".into()), |e| {
-                        (
-                            format!("{:.2}", e.psnr),
-                            format!("{:.4}", e.flip),
-                            format!("{:.4}", e.flip_fovea),
-                        )
-                    });
-            // The same test as `cost::Verdict::pays`, against `full`'s frame.
-            let server = if achieved * (1.0 - WORTH_SAVING) > 1.0 {
-                "foveates"
-            } else {
-                "shades whole"
-            };
-            s.push_str(&format!(
-                "| {} {}×{} ({:.2}, {:.2}) | {} | {:.1}% | {:.1} | {:.0}% | {:.2}× | {:.1}× | {:.0}% | {server} | {psnr} | {flip} | {flip5} |\n",
-                r.scene, r.width, r.height, r.gaze[0], r.gaze[1], r.config,
-                100.0 * r.sampled, r.overhead_ms, 100.0 * r.overhead_ms / full_ms,
-                achieved, ideal, 100.0 * achieved / ideal,
-            ));
-        }
-        s
-    }
-}
-
-impl BenchReport {
-    /// Per group: every pass's median GPU ms under each configuration, the frame, and the
-    /// overhead beside the ideal, so a change to one pass is measured on that pass.
-    fn per_pass(&self) -> String {
-        let mut groups: Vec<(GroupKey, Vec<&BenchRecord>)> = Vec::new();
-        for r in &self.records {
-            let key = group_of(r);
-            match groups.iter_mut().find(|(k, _)| *k == key) {
-                Some((_, rows)) => rows.push(r),
-                None => groups.push((key, vec![r])),
-            }
-        }
-        let mut s = String::from("\n## Per pass: GPU ms (medians)\n\n*Overhead* is what foveation adds (sampling, compaction, reconstruction) as a share of `full`'s frame; *ideal* is 1 / shaded.\n");
-        for (_, rows) in groups {
-            let r0 = rows[0];
-            let mut passes: Vec<&String> = rows.iter().flat_map(|r| r.passes_ms.keys()).collect();
-            // Frame order, as `render::frame::PASSES` declares the passes; others after them.
-            let rank = |p: &str| {
-                PASSES
-                    .iter()
-                    .position(|q| q.label == p)
-                    .unwrap_or(PASSES.len())
-            };
-            passes.sort_by(|a, b| rank(a).cmp(&rank(b)).then(a.cmp(b)));
-            passes.dedup();
-            s.push_str(&format!(
-                "\n### {} {}×{}, gaze ({:.2}, {:.2})\n\n| pass (ms) |",
-                r0.scene, r0.width, r0.height, r0.gaze[0], r0.gaze[1]
-            ));
-            for r in &rows {
-                s.push_str(&format!(" {} |", r.config));
-            }
-            s.push_str(&format!("\n|---|{}\n", "---:|".repeat(rows.len())));
-            let line = |s: &mut String, name: &str, cell: &dyn Fn(&BenchRecord) -> String| {
-                s.push_str(&format!("| {name} |"));
-                for r in &rows {
-                    s.push_str(&format!(" {} |", cell(r)));
-                }
-                s.push('\n');
-            };
-            for p in passes {
-                line(&mut s, p, &|r| {
-                    r.passes_ms.get(p).map_or("–".into(), |v| format!("{v:.1}"))
-                });
-            }
-            line(&mut s, "**frame**", &|r| {
-                format!("**{:.0}**", r.frame_ms.median)
-            });
-            line(&mut s, "shaded", &|r| format!("{:.1}%", 100.0 * r.sampled));
-            line(&mut s, "vs full (achieved / ideal)", &|r| match (
-                r.speedup_vs_full,
-                r.ideal_vs_full,
-            ) {
-                (Some(a), Some(i)) => format!("{a:.2}× / {i:.1}×"),
-                (Some(a), None) => format!("{a:.2}×"),
-                _ => "–".into(),
-            });
-            line(&mut s, "PSNR / FLIP 5° vs full", &|r| {
-                r.vs_full.as_ref().map_or("–".into(), |e| {
-                    format!("{:.1} dB / {:.4}", e.psnr, e.flip_fovea)
-                })
-            });
-            line(
-                &mut s,
-                "overhead / full frame",
-                &|r| match r.speedup_vs_full {
-                    Some(a) if r.overhead_ms > 0.0 => {
-                        format!("{:.0}%", 100.0 * r.overhead_ms / (r.frame_ms.median * a))
-                    }
-                    _ => "–".into(),
-                },
-            );
         }
         s
     }

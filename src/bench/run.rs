@@ -293,6 +293,7 @@ pub fn run(
                 shade_speedup_vs_full: None,
                 overhead_ms: 0.0,
                 ideal_vs_full: None,
+                bound_vs_full: None,
                 vs_full: (!s.vs_full.is_empty()).then(|| median_errors(&s.vs_full)),
                 pareto: false,
             });
