@@ -78,6 +78,9 @@ pub struct Point {
     /// Where a foveated configuration would sit if its frame cost `full`'s times the share of
     /// pixels it shades: the distance to the limit, drawn as a hollow marker joined to the point.
     pub ideal_ms: Option<f64>,
+    /// Where it would sit with foveation's own passes free and only shading falling with the
+    /// samples (`bench::bound_vs_full`), on the same line.
+    pub bound_ms: Option<f64>,
 }
 
 pub struct BenchPlot {
@@ -103,25 +106,28 @@ fn one_two_five(lo: f64, hi: f64) -> Vec<f64> {
 
 impl BenchPlot {
     pub fn of(report: &BenchReport) -> BenchPlot {
-        // Per configuration: frame times, FLIPs and ideal frame times over the groups.
-        type Series = (Vec<f64>, Vec<f64>, Vec<f64>);
+        // Per configuration: frame times, FLIPs, ideal and bound frame times over the groups.
+        type Series = (Vec<f64>, Vec<f64>, Vec<f64>, Vec<f64>);
         let mut by_config: BTreeMap<&str, Series> = BTreeMap::new();
         let mut order = Vec::new();
         for r in &report.records {
             let e = by_config.entry(&r.config).or_insert_with(|| {
                 order.push(r.config.as_str());
-                (Vec::new(), Vec::new(), Vec::new())
+                (Vec::new(), Vec::new(), Vec::new(), Vec::new())
             });
             e.0.push(r.frame_ms.median);
             e.1.push(r.errors.flip);
             if let (Some(a), Some(i)) = (r.speedup_vs_full, r.ideal_vs_full) {
                 e.2.push(r.frame_ms.median * a / i);
             }
+            if let (Some(a), Some(b)) = (r.speedup_vs_full, r.bound_vs_full) {
+                e.3.push(r.frame_ms.median * a / b);
+            }
         }
         let mut points: Vec<Point> = order
             .iter()
             .filter_map(|name| {
-                let (t, f, ideal) = by_config.get(name)?;
+                let (t, f, ideal, bound) = by_config.get(name)?;
                 Some(Point {
                     name: name.to_string(),
                     frame_ms: median(t.clone()),
@@ -129,6 +135,7 @@ impl BenchPlot {
                     preset: crate::settings::Preset::from_name(name).is_some(),
                     pareto: false,
                     ideal_ms: (!ideal.is_empty()).then(|| median(ideal.clone())),
+                    bound_ms: (!bound.is_empty()).then(|| median(bound.clone())),
                 })
             })
             .filter(|p| p.frame_ms.is_finite() && p.flip.is_finite() && p.frame_ms > 0.0)
@@ -214,6 +221,23 @@ impl Plot for BenchPlot {
                 .label("ideal: full × shaded share")
                 .legend(move |(x, y)| Circle::new((x + 10, y), 5, c.stroke_width(2)));
         }
+        let bound: Vec<(&Point, f64)> = self
+            .points
+            .iter()
+            .filter_map(|p| Some((p, p.bound_ms.filter(|v| *v > 0.0)?)))
+            .collect();
+        if !bound.is_empty() {
+            let c = colour(2);
+            chart
+                .draw_series(
+                    bound
+                        .iter()
+                        .map(|(p, b)| TriangleMarker::new((*b, p.flip), 6, c.stroke_width(2))),
+                )
+                .map_err(err)?
+                .label("bound: foveation's passes free, shading × shaded share")
+                .legend(move |(x, y)| TriangleMarker::new((x + 10, y), 6, c.stroke_width(2)));
+        }
         for (preset, name) in [(true, "preset"), (false, "other configuration")] {
             let c = if preset { colour(0) } else { colour(5) };
             let size = if preset { 6 } else { 4 };
@@ -235,6 +259,7 @@ impl Plot for BenchPlot {
             .iter()
             .map(|p| (p.frame_ms, p.flip))
             .chain(ideal.iter().map(|(p, i)| (*i, p.flip)))
+            .chain(bound.iter().map(|(p, b)| (*b, p.flip)))
             .map(|xy| chart.backend_coord(&xy))
             .collect();
         let (xs, ys) = chart.plotting_area().get_pixel_range();
