@@ -89,14 +89,15 @@ pub fn needed(width: u32, height: u32, flags: &[u32]) -> (u32, u32, u32) {
         }
     }
     // Fill tile k reads level-1 cells 16k − 1 … 16k + 15, level 1's workgroup j writes
-    // 32j − 1 … 32j + 30: j runs where a fill tile 2j − 1 … 2j + 1 (each axis) does.
+    // 32j − 1 … 32j + 30: j runs where a fill tile 2j − 1 … 2j + 1 (each axis) does, so tile
+    // k needs the workgroups ⌊k/2⌋ … ⌈k/2⌉.
     let (lx, ly) = level1_grid(width, height);
     let mut level1 = vec![false; (lx * ly) as usize];
     for y in 0..gy {
         for x in 0..gx {
             if fill[(y * gx + x) as usize] {
-                for j in (x / 2)..=((x + 1) / 2).min(lx.saturating_sub(1)) {
-                    for i in (y / 2)..=((y + 1) / 2).min(ly.saturating_sub(1)) {
+                for j in (x / 2)..=x.div_ceil(2).min(lx.saturating_sub(1)) {
+                    for i in (y / 2)..=y.div_ceil(2).min(ly.saturating_sub(1)) {
                         level1[(i * lx + j) as usize] = true;
                     }
                 }
