@@ -154,6 +154,16 @@ impl BenchPlot {
     }
 }
 
+impl BenchPlot {
+    /// The points with a positive frame time `at` (ideal, bound) to draw beside them.
+    fn beside(&self, at: impl Fn(&Point) -> Option<f64>) -> Vec<(&Point, f64)> {
+        self.points
+            .iter()
+            .filter_map(|p| Some((p, at(p).filter(|v| *v > 0.0)?)))
+            .collect()
+    }
+}
+
 impl Plot for BenchPlot {
     fn size(&self) -> (u32, u32) {
         (1000, 640)
@@ -196,11 +206,7 @@ impl Plot for BenchPlot {
             .legend(|(x, y)| {
                 PathElement::new(vec![(x, y), (x + 20, y)], colour(1).stroke_width(2))
             });
-        let ideal: Vec<(&Point, f64)> = self
-            .points
-            .iter()
-            .filter_map(|p| Some((p, p.ideal_ms.filter(|v| *v > 0.0)?)))
-            .collect();
+        let ideal = self.beside(|p| p.ideal_ms);
         if !ideal.is_empty() {
             let c = colour(3);
             for (p, i) in &ideal {
@@ -221,11 +227,7 @@ impl Plot for BenchPlot {
                 .label("ideal: full × shaded share")
                 .legend(move |(x, y)| Circle::new((x + 10, y), 5, c.stroke_width(2)));
         }
-        let bound: Vec<(&Point, f64)> = self
-            .points
-            .iter()
-            .filter_map(|p| Some((p, p.bound_ms.filter(|v| *v > 0.0)?)))
-            .collect();
+        let bound = self.beside(|p| p.bound_ms);
         if !bound.is_empty() {
             let c = colour(2);
             chart
