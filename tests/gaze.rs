@@ -61,6 +61,14 @@ async fn a_real_recording_replays_with_nothing_lost_and_much_coalesced() {
     )
     .unwrap();
     let (url, shutdown) = server(None).await;
+    // A short replay first, so the scene's load and its pipelines' compilation (seconds on a
+    // loaded software adapter) fall outside the 1.5 s whose frames are counted below.
+    let warm = ReplayOptions {
+        start_ms: 10_000.0,
+        duration_ms: Some(200.0),
+        ..options(&url)
+    };
+    replay(&rec.samples, &warm, |_, _| {}).await.unwrap();
     // 1.5 s of the 1000 Hz recording around a blink (blink at 11.298 s).
     let opts = ReplayOptions {
         start_ms: 10_500.0,
