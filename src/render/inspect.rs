@@ -39,7 +39,9 @@ impl Renderer {
             .get(scene)
             .and_then(|s| s.photons.as_ref())
             .and_then(|m| m.nodes());
+        // Each list's workgroup count: the x of its indirect arguments.
         let tile_args = u32s(buf(pull_push_tiles::ARGS)?);
+        let count = |offset: u64| tile_args.get(offset as usize / 4).copied().unwrap_or(0);
         Ok(Inspection {
             probability: f32s(buf("sampling.probability")?),
             flags: u32s(buf("sampling.flags")?),
@@ -79,9 +81,9 @@ impl Renderer {
                 }
                 None => Vec::new(),
             },
-            fill_tiles: tile_args.first().copied().unwrap_or(0),
-            pull_tiles: tile_args.get(3).copied().unwrap_or(0),
-            level1_tiles: tile_args.get(6).copied().unwrap_or(0),
+            fill_tiles: count(0),
+            pull_tiles: count(pull_push_tiles::PULL_ARGS),
+            level1_tiles: count(pull_push_tiles::LEVEL1_ARGS),
         })
     }
 }

@@ -151,35 +151,32 @@ mod tests {
         let (lx, ly) = level1_grid(w, h);
         assert!(px <= gx && py <= gy, "the pull's grid fits in the fill's");
         assert!(lx <= gx && ly <= gy, "level 1's grid fits in the fill's");
-        let mut flags = vec![0; (w * h) as usize];
-        assert_eq!(needed(w, h, &flags), (0, 0, 0), "background needs none");
-        flags
-            .iter_mut()
-            .for_each(|f| *f = FLAG_COVERED | FLAG_SAMPLED);
-        assert_eq!(
-            needed(w, h, &flags),
-            (0, px * py, 0),
-            "every pixel sampled: no fill"
-        );
-        flags
-            .iter_mut()
-            .for_each(|f| *f = FLAG_COVERED | FLAG_REUSED);
-        assert_eq!(
-            needed(w, h, &flags),
-            (0, px * py, 0),
-            "reused samples count as samples"
-        );
-        flags.iter_mut().for_each(|f| *f = FLAG_COVERED);
-        assert_eq!(
-            needed(w, h, &flags),
-            (gx * gy, 0, lx * ly),
-            "no sample: nothing to pull"
-        );
+        // Frames with every pixel alike.
+        for (every, want, why) in [
+            (0, (0, 0, 0), "background needs none"),
+            (
+                FLAG_COVERED | FLAG_SAMPLED,
+                (0, px * py, 0),
+                "every pixel sampled: no fill",
+            ),
+            (
+                FLAG_COVERED | FLAG_REUSED,
+                (0, px * py, 0),
+                "reused samples count as samples",
+            ),
+            (
+                FLAG_COVERED,
+                (gx * gy, 0, lx * ly),
+                "no sample: nothing to pull",
+            ),
+        ] {
+            assert_eq!(needed(w, h, &vec![every; (w * h) as usize]), want, "{why}");
+        }
         // Fill tiles start at pixel −1, pull tiles at 0: (30, 30) and (0, 0) share both,
         // (31, 31) is in fill tile (1, 1) and pull tile (0, 0), (32, 32) in (1, 1) of both.
         // Fill tile 0 reads level-1 cells −1 … 15 (level 1's workgroup 0: −1 … 30), tile 1
         // cells 15 … 31, in workgroups 0 and 1.
-        flags.iter_mut().for_each(|f| *f = 0);
+        let mut flags = vec![0; (w * h) as usize];
         for (x, y) in [(30, 30), (0, 0)] {
             flags[(y * w + x) as usize] = FLAG_COVERED;
         }
