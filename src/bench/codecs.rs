@@ -9,6 +9,7 @@ use std::time::{Duration, Instant};
 use super::codec_configs::CodecConfig;
 use super::codecs_report::{CodecReport, CodecRow, FloorRow};
 use super::report::{Machine, Spread};
+use super::run::RADIOSITY_WAIT;
 use crate::encode::foveated::{low_pass, LowPass};
 use crate::encode::h264::{H264Config, H264Stream, DEFAULT_KEYFRAME_S};
 use crate::encode::{encode, inset, inset_packed, yuv, EncodeError};
@@ -130,6 +131,8 @@ pub fn run_codecs(
         .camera;
     let total = opts.path.len() * (1 + opts.configs.len());
     let mut done = 0;
+    progress(done, total, "radiosity");
+    renderer.settle_radiosity(&opts.scene, RADIOSITY_WAIT)?;
     let mut frames = Vec::new();
     for (k, g) in opts.path.iter().enumerate() {
         if stop.load(Ordering::Relaxed) {

@@ -31,6 +31,10 @@ pub struct BenchOptions {
 }
 
 /// Receives (frames done, frames in all, what is running) after every frame.
+/// How long a sweep waits for a scene's radiosity to converge before measuring it (`cornell`
+/// takes ~7 s here).
+pub const RADIOSITY_WAIT: std::time::Duration = std::time::Duration::from_secs(3600);
+
 pub type Progress<'a> = &'a mut dyn FnMut(usize, usize, &str);
 
 /// One configuration's measurements within one group.
@@ -182,6 +186,8 @@ pub fn run(
     let mut interrupted = false;
     let reference = RenderSettings::of(Preset::Reference);
     for (gi, (scene, (w, h), gaze0)) in groups.iter().enumerate() {
+        progress(done, total, &format!("radiosity of {scene}"));
+        renderer.settle_radiosity(scene, RADIOSITY_WAIT)?;
         let viewing = Viewing {
             width: *w,
             height: *h,
