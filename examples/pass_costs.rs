@@ -24,7 +24,7 @@ fn main() -> Result<()> {
         .map_err(anyhow::Error::msg)?;
     let moving = args.get(4).is_some_and(|a| a == "moving");
     let mut r = Renderer::new()?;
-    r.settle_radiosity(scene, std::time::Duration::from_secs(3600))?;
+    r.settle_radiosity(scene, std::time::Duration::from_secs(3600), &|| false)?;
     let mut times: Vec<BTreeMap<String, Vec<f64>>> = vec![BTreeMap::new(); configs.len()];
     for f in 0..frames + 2 {
         for (i, c) in configs.iter().enumerate() {

@@ -149,6 +149,44 @@ fn stopping_early_keeps_what_was_measured() {
     );
 }
 
+/// A scene lit by radiosity is measured once its solve has converged: while it refines, a
+/// frame and the reference it is compared with would be lit by different solutions.
+#[test]
+fn a_radiosity_scene_is_measured_on_its_converged_solution() {
+    let mut renderer = Renderer::new().unwrap_or_else(|e| panic!("GPU tests need an adapter: {e}"));
+    let solve = renderer
+        .radiosity("cornell")
+        .unwrap()
+        .expect("cornell has a solve");
+    let opts = BenchOptions {
+        scenes: vec!["cornell".into()],
+        sizes: vec![(32, 24)],
+        gazes: vec![[0.5, 0.5]],
+        moving: false,
+        warmup: 0,
+        frames: 1,
+        configs: sweep("full,balanced").unwrap(),
+        display: Display::default(),
+        pupil_mm: 4.0,
+        against: None,
+    };
+    let stop = AtomicBool::new(false);
+    let (mut frames, mut before_converged) = (0, 0);
+    run(&mut renderer, &opts, &stop, &mut |done, _, _| {
+        if done > 0 {
+            frames += 1;
+            before_converged += usize::from(!solve.converged());
+        }
+    })
+    .unwrap();
+    // Progress is told after each configuration's frame (the reference's counted with it).
+    assert!(frames >= 2, "both configurations: {frames}");
+    assert_eq!(
+        before_converged, 0,
+        "frames rendered while the solve refined"
+    );
+}
+
 #[test]
 fn against_ground_truth_compares_the_reference_rung_and_every_configuration() {
     let mut renderer = Renderer::new().unwrap_or_else(|e| panic!("GPU tests need an adapter: {e}"));

@@ -60,7 +60,7 @@ fn bunny(n: [f32; 3]) -> bool {
 fn the_walls_light_the_room_and_the_bunny_once_radiosity_converges() {
     let mut r = renderer();
     // As the bench waits before measuring: the frames after it read the converged solution.
-    r.settle_radiosity("cornell", Duration::from_secs(600))
+    r.settle_radiosity("cornell", Duration::from_secs(600), &|| false)
         .unwrap();
     let solve = r
         .radiosity("cornell")

@@ -132,7 +132,9 @@ pub fn run_codecs(
     let total = opts.path.len() * (1 + opts.configs.len());
     let mut done = 0;
     progress(done, total, "radiosity");
-    renderer.settle_radiosity(&opts.scene, RADIOSITY_WAIT)?;
+    renderer.settle_radiosity(&opts.scene, RADIOSITY_WAIT, &|| {
+        stop.load(Ordering::Relaxed)
+    })?;
     let mut frames = Vec::new();
     for (k, g) in opts.path.iter().enumerate() {
         if stop.load(Ordering::Relaxed) {

@@ -187,7 +187,7 @@ pub fn run(
     let reference = RenderSettings::of(Preset::Reference);
     for (gi, (scene, (w, h), gaze0)) in groups.iter().enumerate() {
         progress(done, total, &format!("radiosity of {scene}"));
-        renderer.settle_radiosity(scene, RADIOSITY_WAIT)?;
+        renderer.settle_radiosity(scene, RADIOSITY_WAIT, &|| stop.load(Ordering::Relaxed))?;
         let viewing = Viewing {
             width: *w,
             height: *h,

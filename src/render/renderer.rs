@@ -166,19 +166,29 @@ impl Renderer {
         Ok(self.scenes.get(scene).and_then(|s| s.radiosity.clone()))
     }
 
-    /// Blocks until the scene's radiosity solve converges, for at most `timeout` (loading the
-    /// scene if needed; returns at once where it has no solve or has converged). What measures
-    /// frames waits: while a solve refines, each frame reads a newer solution (a reference and
-    /// the configuration it is compared with would differ by it), and the solver takes a core
-    /// from the frames being timed (`cornell`'s `balanced` frame at 1280×720: 225 ms while it
-    /// solved, 136 after).
+    /// Blocks until the scene's radiosity solve converges, for at most `timeout` or until
+    /// `give_up` says so (loading the scene if needed; returns at once where it has no solve or
+    /// has converged). What measures frames waits: while a solve refines, each frame reads a
+    /// newer solution (a reference and the configuration it is compared with would differ by
+    /// it), and the solver takes a core from the frames being timed (`cornell`'s `balanced`
+    /// frame at 1280×720: 225 ms while it solved, 136 after).
     pub fn settle_radiosity(
         &mut self,
         scene: &str,
         timeout: std::time::Duration,
+        give_up: &dyn Fn() -> bool,
     ) -> Result<(), RenderError> {
-        if let Some(solve) = self.radiosity(scene)? {
-            solve.wait(timeout);
+        let Some(solve) = self.radiosity(scene)? else {
+            return Ok(());
+        };
+        let deadline = std::time::Instant::now() + timeout;
+        while !solve.converged() && !give_up() {
+            let left = deadline.saturating_duration_since(std::time::Instant::now());
+            if left.is_zero() {
+                break;
+            }
+            // Short waits, so a stop asked for (Ctrl-C) is seen within a fraction of a second.
+            solve.wait(left.min(std::time::Duration::from_millis(200)));
         }
         Ok(())
     }
