@@ -7,21 +7,26 @@ use fovea::bench::{run, sweep, write_reports, BenchOptions, GroundTruth};
 use fovea::protocol::Display;
 use fovea::render::Renderer;
 
-#[test]
-fn a_tiny_sweep_writes_json_markdown_and_svg() {
-    let mut renderer = Renderer::new().unwrap_or_else(|e| panic!("GPU tests need an adapter: {e}"));
-    let opts = BenchOptions {
-        scenes: vec!["bunny-marble".into()],
-        sizes: vec![(64, 64)],
+/// One scene at one size, the gaze at the centre, still, the default display and pupil.
+fn options(scene: &str, size: (u32, u32), warmup: u32, frames: u32, configs: &str) -> BenchOptions {
+    BenchOptions {
+        scenes: vec![scene.into()],
+        sizes: vec![size],
         gazes: vec![[0.5, 0.5]],
         moving: false,
-        warmup: 1,
-        frames: 2,
-        configs: sweep("full,fast").unwrap(),
+        warmup,
+        frames,
+        configs: sweep(configs).unwrap(),
         display: Display::default(),
         pupil_mm: 4.0,
         against: None,
-    };
+    }
+}
+
+#[test]
+fn a_tiny_sweep_writes_json_markdown_and_svg() {
+    let mut renderer = Renderer::new().unwrap_or_else(|e| panic!("GPU tests need an adapter: {e}"));
+    let opts = options("bunny-marble", (64, 64), 1, 2, "full,fast");
     let mut calls = 0;
     let report = run(
         &mut renderer,
@@ -123,18 +128,7 @@ fn a_tiny_sweep_writes_json_markdown_and_svg() {
 #[test]
 fn stopping_early_keeps_what_was_measured() {
     let mut renderer = Renderer::new().unwrap_or_else(|e| panic!("GPU tests need an adapter: {e}"));
-    let opts = BenchOptions {
-        scenes: vec!["bunny".into()],
-        sizes: vec![(32, 32)],
-        gazes: vec![[0.5, 0.5]],
-        moving: false,
-        warmup: 0,
-        frames: 3,
-        configs: sweep("full,fast").unwrap(),
-        display: Display::default(),
-        pupil_mm: 4.0,
-        against: None,
-    };
+    let opts = options("bunny", (32, 32), 0, 3, "full,fast");
     let stop = AtomicBool::new(false);
     let report = run(&mut renderer, &opts, &stop, &mut |done, _, _| {
         if done >= 4 {
@@ -158,18 +152,7 @@ fn a_radiosity_scene_is_measured_on_its_converged_solution() {
         .radiosity("cornell")
         .unwrap()
         .expect("cornell has a solve");
-    let opts = BenchOptions {
-        scenes: vec!["cornell".into()],
-        sizes: vec![(32, 24)],
-        gazes: vec![[0.5, 0.5]],
-        moving: false,
-        warmup: 0,
-        frames: 1,
-        configs: sweep("full,balanced").unwrap(),
-        display: Display::default(),
-        pupil_mm: 4.0,
-        against: None,
-    };
+    let opts = options("cornell", (32, 24), 0, 1, "full,balanced");
     let stop = AtomicBool::new(false);
     let (mut frames, mut before_converged) = (0, 0);
     run(&mut renderer, &opts, &stop, &mut |done, _, _| {
@@ -204,16 +187,8 @@ fn against_ground_truth_compares_the_reference_rung_and_every_configuration() {
     )
     .unwrap();
     let opts = BenchOptions {
-        scenes: vec!["bunny-marble".into()],
-        sizes: vec![(48, 32)],
-        gazes: vec![[0.5, 0.5]],
-        moving: false,
-        warmup: 0,
-        frames: 1,
-        configs: sweep("full,fast").unwrap(),
-        display: Display::default(),
-        pupil_mm: 4.0,
         against: Some(GroundTruth::load(&png).unwrap()),
+        ..options("bunny-marble", (48, 32), 0, 1, "full,fast")
     };
     let report = run(
         &mut renderer,
