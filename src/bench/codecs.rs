@@ -131,7 +131,7 @@ pub fn run_codecs(
         .camera;
     let total = opts.path.len() * (1 + opts.configs.len());
     let mut done = 0;
-    progress(done, total, "radiosity");
+    progress(done, total, &format!("radiosity of {}", opts.scene));
     renderer.settle_radiosity(&opts.scene, RADIOSITY_WAIT, &|| {
         stop.load(Ordering::Relaxed)
     })?;

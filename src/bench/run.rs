@@ -30,11 +30,11 @@ pub struct BenchOptions {
     pub against: Option<super::GroundTruth>,
 }
 
-/// Receives (frames done, frames in all, what is running) after every frame.
 /// How long a sweep waits for a scene's radiosity to converge before measuring it (`cornell`
 /// takes ~7 s here).
 pub const RADIOSITY_WAIT: std::time::Duration = std::time::Duration::from_secs(3600);
 
+/// Receives (frames done, frames in all, what is running) after every frame.
 pub type Progress<'a> = &'a mut dyn FnMut(usize, usize, &str);
 
 /// One configuration's measurements within one group.
