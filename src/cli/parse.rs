@@ -55,6 +55,13 @@ pub fn parse_seconds(s: &str) -> Result<f64, String> {
     number_in(s, 0.1, 3600.0)
 }
 
+/// `--frame-budget-s`: down to a millisecond, since a GPU's frames take a few (an H200 renders
+/// `gallery` at 1280×720 in ~2 ms), where the other durations' floor of 0.1 s would allow only
+/// budgets no such server wants.
+pub fn parse_frame_budget(s: &str) -> Result<f64, String> {
+    number_in(s, 0.001, 3600.0)
+}
+
 /// `--display-width-cm`: the range a `hello` is held to.
 pub fn display_width_cm(s: &str) -> Result<f64, String> {
     number_in(s, 1.0, 1000.0)
@@ -109,4 +116,23 @@ impl EncodingArgs {
 pub fn codec(s: &str) -> Result<fovea::protocol::Codec, String> {
     serde_json::from_value(serde_json::Value::String(s.to_string()))
         .map_err(|_| format!("unknown codec {s:?} (jpeg, png, h264)"))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A GPU server's budget (a 60 Hz frame) is accepted; nothing under a millisecond, not a
+    /// number or past an hour is; the other durations keep their floor of 0.1 s.
+    #[test]
+    fn a_frame_budget_goes_down_to_a_millisecond() {
+        for ok in ["0.001", "0.016", "10", "3600"] {
+            assert!(parse_frame_budget(ok).is_ok(), "{ok}");
+        }
+        for bad in ["0", "0.0005", "-1", "nan", "inf", "3601", "", "ten"] {
+            assert!(parse_frame_budget(bad).is_err(), "{bad}");
+        }
+        assert!(parse_seconds("0.016").is_err());
+        assert!(parse_seconds("0.1").is_ok());
+    }
 }

@@ -67,8 +67,9 @@ pub struct ServeArgs {
     /// Longest a session's frame may take on the renderer, counting its share with the other
     /// sessions (its render time × sessions rendering). A hello or settings change past it is
     /// refused with `over_budget`, naming the largest size that fits. Frames longer than
-    /// 100 ms are rendered in parts, so others' frames are never stuck behind one.
-    #[arg(long, default_value_t = 10.0, value_parser = super::parse::parse_seconds)]
+    /// 100 ms are rendered in parts, so others' frames are never stuck behind one. From
+    /// 0.001 to 3600.
+    #[arg(long, default_value_t = 10.0, value_parser = super::parse::parse_frame_budget)]
     pub frame_budget_s: f64,
 }
 
