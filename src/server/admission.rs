@@ -35,14 +35,24 @@ pub fn check(
     Err(ProtocolError::new(
         ErrorCode::OverBudget,
         format!(
-            "a {w}x{h} frame at preset {preset} is estimated at {:.1} s on this adapter; with \
-             {sessions} session(s) sharing it that is {:.1} s a frame, over the per-frame budget \
-             of {:.1} s (serve --frame-budget-s). {advice}",
-            ms / 1e3,
-            shared / 1e3,
-            budget / 1e3,
+            "a {w}x{h} frame at preset {preset} is estimated at {} on this adapter; with \
+             {sessions} session(s) sharing it that is {} a frame, over the per-frame budget of \
+             {} (serve --frame-budget-s). {advice}",
+            duration(ms),
+            duration(shared),
+            duration(budget),
         ),
     ))
+}
+
+/// A duration for the message: milliseconds under a second (a GPU server's budget may be
+/// 16 ms, which whole tenths of a second would print as 0.0 s), else seconds.
+fn duration(ms: f64) -> String {
+    if ms < 1e3 {
+        format!("{ms:.0} ms")
+    } else {
+        format!("{:.1} s", ms / 1e3)
+    }
 }
 
 /// The largest frame of `request`'s shape whose estimate is within `ms` (bisection on the
@@ -77,4 +87,19 @@ fn largest_fit(state: &ServerState, request: &FrameRequest, ms: f64) -> Option<(
     }
     let r = sized(lo);
     Some((r.width, r.height))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::duration;
+
+    /// A budget of a few milliseconds reads as such, not as "0.0 s".
+    #[test]
+    fn durations_read_in_milliseconds_under_a_second() {
+        assert_eq!(duration(16.0), "16 ms");
+        assert_eq!(duration(98.6), "99 ms");
+        assert_eq!(duration(999.4), "999 ms");
+        assert_eq!(duration(1000.0), "1.0 s");
+        assert_eq!(duration(10_000.0), "10.0 s");
+    }
 }
