@@ -29,8 +29,7 @@ fn decode(decoder: &mut Decoder, bytes: &[u8]) -> Vec<u8> {
         .expect("decodes")
         .expect("a picture per frame: nothing is held back");
     // Full range, as the stream's VUI says (openh264's own `write_rgba8` assumes limited).
-    let rgba = fovea::encode::yuv::picture_to_rgba(&yuv);
-    rgba
+    fovea::encode::yuv::picture_to_rgba(&yuv)
 }
 
 #[test]

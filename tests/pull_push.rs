@@ -348,7 +348,7 @@ fn pull_push_on_the_gpu_matches_its_cpu_twin() {
         req.stream = stream;
         if name == "cornell" {
             // Narrowed to the inside of the box: no background.
-            let mut camera = scene.file.camera.clone();
+            let mut camera = scene.file.camera;
             camera.fov_y_deg = 12.0;
             req.camera = Some(camera);
         }

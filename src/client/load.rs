@@ -433,7 +433,7 @@ async fn session(
             break;
         }
         result.gaze_sent += 1;
-        if index == 0 && seq % (opts.rate_hz as u64).max(1) == 0 {
+        if index == 0 && seq.is_multiple_of((opts.rate_hz as u64).max(1)) {
             progress(opts.sessions, started.elapsed().as_secs_f64());
         }
     }

@@ -296,7 +296,7 @@ pub async fn replay(
             r#"{{"type":"gaze","seq":{seq},"t_ms":{t_ms},"sample_t_ms":{sample_t},"x":{x},"y":{y}{pupil}}}"#
         ));
         sent_count += 1;
-        if sent_count % 200 == 0 {
+        if sent_count.is_multiple_of(200) {
             progress(sent_count + unsendable, total);
         }
         ok

@@ -179,7 +179,8 @@ fn validate_hello(h: &Hello, limits: &Limits) -> Result<(), ProtocolError> {
         let (lo, hi) = crate::encode::inset::INSET_DEG_RANGE;
         in_range("inset_deg", d, lo, hi)?;
     }
-    if h.codec == super::Codec::H264 && (h.width % 2 != 0 || h.height % 2 != 0) {
+    if h.codec == super::Codec::H264 && (!h.width.is_multiple_of(2) || !h.height.is_multiple_of(2))
+    {
         return Err(ProtocolError::new(
             ErrorCode::OutOfRange,
             format!(

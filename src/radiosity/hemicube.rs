@@ -19,7 +19,7 @@ const BIAS: f32 = 0.03;
 /// Face-local coordinates (x, y, z) of a vector for face k (axis k / 2, sign by k % 2).
 fn local(k: usize, r: Vec3) -> Vec3 {
     let a = k / 2;
-    let s = if k % 2 == 0 { 1.0 } else { -1.0 };
+    let s = if k.is_multiple_of(2) { 1.0 } else { -1.0 };
     Vec3::new(r[(a + 1) % 3], r[(a + 2) % 3], s * r[a])
 }
 

@@ -48,7 +48,7 @@ impl FoveationPolicy {
         }
         let s = self.streams.entry(req.stream).or_default();
         s.frames += 1;
-        let probe = s.frames % PROBE_EVERY == 0;
+        let probe = s.frames.is_multiple_of(PROBE_EVERY);
         let verdict = cost.foveation_verdict(req);
         // A stream keeps a choice PROBE_EVERY frames before it may change it again: on a GPU
         // frames take a few ms and one frame's noise moves the estimates by more than

@@ -293,7 +293,7 @@ impl Renderer {
     /// Reads the finished frame back.
     /// Whether a frame is converted to I420 on the GPU and read back so (see `Readback`).
     fn wants_i420(&self, req: &FrameRequest) -> bool {
-        let even = req.width % 2 == 0 && req.height % 2 == 0;
+        let even = req.width.is_multiple_of(2) && req.height.is_multiple_of(2);
         let gpu = !self.is_software();
         even && match req.readback {
             Readback::Rgba => false,

@@ -169,9 +169,8 @@ mod tests {
         full.charge(1, 650.0);
         let first = (0..40)
             .map(|k| {
-                full.pick(&[(1, k), (2, k), (3, k)]).map(|i| {
+                full.pick(&[(1, k), (2, k), (3, k)]).inspect(|&i| {
                     full.charge(i as u64 + 1, 15.0);
-                    i
                 })
             })
             .filter(|i| *i == Some(0))

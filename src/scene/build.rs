@@ -363,7 +363,7 @@ fn load_mesh(scene: &str, name: &str, at: Location) -> Result<Loaded, SceneError
     let path = folder
         .resolve(base, name)
         .map_err(|e| mesh_err(e.to_string()))?;
-    load_model(&path, folder).map_err(|e| mesh_err(e))
+    load_model(&path, folder).map_err(mesh_err)
 }
 
 /// A mesh or glTF file by its extension.

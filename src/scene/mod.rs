@@ -298,7 +298,7 @@ mod tests {
     #[test]
     fn every_builtin_scene_loads() {
         for name in builtin_names() {
-            let s = Scene::builtin(&name).unwrap_or_else(|e| panic!("{name}: {e}"));
+            let s = Scene::builtin(name).unwrap_or_else(|e| panic!("{name}: {e}"));
             assert!(s.mesh.triangle_count() > 0);
             assert!((Vec3::from(s.file.light.to_light).length() - 1.0).abs() < 1e-6);
             assert_eq!(s.mesh.material.len(), s.mesh.positions.len());

@@ -103,19 +103,14 @@ fn scene_of_loaded(
                 .collect();
             let camera = g.camera.map(|c| aim(c, centre, (hi - lo).length()));
             (
-                scene_file(
-                    &name,
-                    1000.0,
-                    light,
-                    camera.unwrap_or_else(|| frame(lo, hi)),
-                ),
+                scene_file(name, 1000.0, light, camera.unwrap_or_else(|| frame(lo, hi))),
                 lights,
             )
         }
         Loaded::Plain(_) => {
             let diagonal = f64::from((hi - lo).length()).max(1e-9);
             let mut f = scene_file(
-                &name,
+                name,
                 PLAIN_MESH_DIAGONAL_MM / diagonal,
                 light(DEFAULT_TO_LIGHT, [1.0; 3], 1.0),
                 frame(lo, hi),

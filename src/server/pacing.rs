@@ -190,7 +190,7 @@ mod tests {
         let t0 = Instant::now();
         let mut p = Pacer::new(1, STALL, t0);
         let first = p.next_frame().unwrap();
-        assert_eq!(p.on_gaze(gaze(1), ms(t0, 5)).coalesced, false);
+        assert!(!p.on_gaze(gaze(1), ms(t0, 5)).coalesced);
         let o = p.on_gaze(gaze(2), ms(t0, 6));
         assert!(
             o.coalesced && o.skipped,

@@ -90,7 +90,7 @@ async fn an_inset_frame_is_composed_where_the_gaze_was() {
         colours > 50,
         "the composed frame shows the scene ({colours} colours)"
     );
-    assert!(eval(&page, "window.fovea.errors.length").await == Value::from(0));
+    assert!(eval(&page, "window.fovea.errors.length").await == 0);
     screenshot(&page, "inset").await;
     drop(page);
     f.finish();
@@ -162,7 +162,7 @@ async fn an_h264_inset_frame_is_one_picture_composed_where_the_gaze_was() {
         colours > 50,
         "the frame shows the scene ({colours} colours)"
     );
-    assert!(eval(&page, "window.fovea.errors.length").await == Value::from(0));
+    assert!(eval(&page, "window.fovea.errors.length").await == 0);
     screenshot(&page, "h264-inset").await;
     drop(page);
     f.finish();

@@ -167,7 +167,7 @@ pub async fn wait_for(page: &Page, js: &str, seconds: u64) -> Value {
     let deadline = Instant::now() + Duration::from_secs(seconds);
     loop {
         let v = eval(page, js).await;
-        if !matches!(v, Value::Null | Value::Bool(false)) && v != Value::from(0) {
+        if !matches!(v, Value::Null | Value::Bool(false)) && v != 0 {
             return v;
         }
         if Instant::now() > deadline {

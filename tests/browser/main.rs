@@ -102,7 +102,7 @@ async fn the_page_streams_frames_and_the_marker_follows_the_mouse() {
     )
     .await;
     assert_eq!(status, Value::from(404));
-    assert!(eval(&page, "window.fovea.errors.length").await == Value::from(0));
+    assert!(eval(&page, "window.fovea.errors.length").await == 0);
     drop(page);
     let status = f.finish();
     assert!(
@@ -224,7 +224,7 @@ async fn h264_frames_decode_with_webcodecs_and_the_canvas_shows_the_scene() {
         eval(&page, "window.fovea.player.errors").await,
         Value::from(0)
     );
-    assert!(eval(&page, "window.fovea.errors.length").await == Value::from(0));
+    assert!(eval(&page, "window.fovea.errors.length").await == 0);
     drop(page);
     f.finish();
 }

@@ -56,12 +56,20 @@ fn eyelink_excerpt_with_a_blink_and_an_off_screen_sample() {
 
 #[test]
 fn the_shipped_recordings_parse() {
-    for (file, w, h, n) in [(
-        "../../assets/gaze/eyelink_500hz_1920x1200.csv",
-        1920,
-        1200,
-        14_353,
-    )] {
+    for (file, w, h, n) in [
+        (
+            "../../assets/gaze/eyelink_500hz_1920x1200.csv",
+            1920,
+            1200,
+            14_353,
+        ),
+        (
+            "../../assets/gaze/eyelink_1000hz_1920x1080.csv",
+            1920,
+            1080,
+            66_827,
+        ),
+    ] {
         let text = std::fs::read_to_string(
             std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
                 .join("src/gaze")
