@@ -42,13 +42,21 @@ impl Quota {
         Quota(AtomicU64::new(max_bytes.saturating_sub(folder_bytes(dir))))
     }
 
-    /// Takes `n` bytes if that many are left.
+    /// Takes `n` bytes if that many are left. A compare-exchange loop, as `fetch_update` is:
+    /// Rust 1.95 deprecates that name for `try_update`, which our minimum (1.90) lacks, and a
+    /// fresh install's build warned.
     fn take(&self, n: u64) -> bool {
-        self.0
-            .fetch_update(Ordering::SeqCst, Ordering::SeqCst, |left| {
-                left.checked_sub(n)
-            })
-            .is_ok()
+        let mut left = self.0.load(Ordering::SeqCst);
+        while let Some(rest) = left.checked_sub(n) {
+            match self
+                .0
+                .compare_exchange_weak(left, rest, Ordering::SeqCst, Ordering::SeqCst)
+            {
+                Ok(_) => return true,
+                Err(now) => left = now,
+            }
+        }
+        false
     }
 }
 
@@ -324,6 +332,22 @@ mod tests {
         let text = std::fs::read_to_string(r.finish().unwrap()).unwrap();
         assert_eq!(text.lines().count(), 3, "{text:?}");
         let _ = std::fs::remove_dir_all(&dir);
+    }
+
+    /// Sessions record on threads of their own: taken together they never overdraw the folder,
+    /// and they stop only when what is left is less than one more take.
+    #[test]
+    fn a_quota_shared_by_threads_is_never_overdrawn() {
+        let quota = Arc::new(Quota(AtomicU64::new(1000)));
+        let takers: Vec<_> = (0..8)
+            .map(|_| {
+                let q = quota.clone();
+                std::thread::spawn(move || (0..200).filter(|_| q.take(7)).count() as u64)
+            })
+            .collect();
+        let taken: u64 = takers.into_iter().map(|t| t.join().unwrap()).sum();
+        assert_eq!(taken, 1000 / 7);
+        assert_eq!(quota.0.load(Ordering::SeqCst), 1000 % 7);
     }
 
     /// Record → replay keeps the recording's timing: samples reach the server late by a
