@@ -46,9 +46,10 @@ pub fn check(
 }
 
 /// A duration for the message: milliseconds under a second (a GPU server's budget may be
-/// 16 ms, which whole tenths of a second would print as 0.0 s), else seconds.
+/// 16 ms, which whole tenths of a second would print as 0.0 s), else seconds. The switch is
+/// where milliseconds would round to 1000.
 fn duration(ms: f64) -> String {
-    if ms < 1e3 {
+    if ms < 999.5 {
         format!("{ms:.0} ms")
     } else {
         format!("{:.1} s", ms / 1e3)
@@ -99,6 +100,7 @@ mod tests {
         assert_eq!(duration(16.0), "16 ms");
         assert_eq!(duration(98.6), "99 ms");
         assert_eq!(duration(999.4), "999 ms");
+        assert_eq!(duration(999.6), "1.0 s", "not \"1000 ms\"");
         assert_eq!(duration(1000.0), "1.0 s");
         assert_eq!(duration(10_000.0), "10.0 s");
     }
