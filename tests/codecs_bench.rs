@@ -18,6 +18,7 @@ fn the_codec_sweep_measures_every_configuration_on_the_same_frames() {
         height: 240,
         // A saccade across the frame between frames 2 and 3.
         path: vec![[0.3, 0.4], [0.31, 0.4], [0.7, 0.6], [0.7, 0.61]],
+        stretch_frames: 4,
         recording: "a test path".into(),
         configs: codec_configs(),
         display: Display::default(),
@@ -197,6 +198,7 @@ fn an_orbiting_camera_changes_what_the_encoder_sees() {
             width: 160,
             height: 120,
             path: vec![[0.5, 0.5]; 4],
+            stretch_frames: 4,
             recording: "a still gaze".into(),
             configs: h264.clone(),
             display: Display::default(),
@@ -218,4 +220,54 @@ fn an_orbiting_camera_changes_what_the_encoder_sees() {
     );
     assert!(turning.markdown().contains("the camera orbiting 180°/s"));
     assert!(!still.markdown().contains("orbiting"));
+}
+
+/// Stretches pooled in one report are streams of their own: a stretch repeated is encoded as
+/// it was the first time (a fresh encoder, render history and clock), so two copies of one
+/// stretch pool to that stretch's figures, keyframe included; run as one stream, the copy's
+/// frames would be P-frames of an encoder that had seen them.
+#[test]
+fn a_repeated_stretch_pools_to_itself() {
+    let mut renderer = Renderer::new().unwrap_or_else(|e| panic!("GPU tests need an adapter: {e}"));
+    let configs = codec_configs()
+        .into_iter()
+        .filter(|c| c.name == TARGET || c.name == "H.264 1000 kbit/s + inset 16°")
+        .collect::<Vec<_>>();
+    assert_eq!(configs.len(), 2);
+    let stretch = [[0.3, 0.4], [0.32, 0.41], [0.6, 0.55]];
+    let run = |renderer: &mut Renderer, copies: usize, stretch_frames: usize| {
+        let opts = CodecOptions {
+            scene: "gallery".into(),
+            width: 160,
+            height: 120,
+            path: stretch.repeat(copies),
+            stretch_frames,
+            recording: "a test path".into(),
+            configs: configs.clone(),
+            display: Display::default(),
+            pictures: None,
+            orbit_deg_per_s: 0.0,
+        };
+        run_codecs(renderer, &opts, &AtomicBool::new(false), &mut |_, _, _| {})
+    };
+    let once = run(&mut renderer, 1, 3).expect("the sweep runs");
+    let twice = run(&mut renderer, 2, 3).expect("the sweep runs");
+    let joined = run(&mut renderer, 2, 6).expect("the sweep runs");
+    assert_eq!(twice.frames, 6);
+    for ((a, b), c) in once.rows.iter().zip(&twice.rows).zip(&joined.rows) {
+        assert_eq!(a.name, b.name);
+        assert_eq!(a.bytes, b.bytes, "{}", a.name);
+        assert_eq!(a.keyframe_bytes, b.keyframe_bytes, "{}", a.name);
+        assert!((a.kbps - b.kbps).abs() < 1e-9, "{}", a.name);
+        assert!((a.flip_fovea - b.flip_fovea).abs() < 1e-12, "{}", a.name);
+        if a.config.h264_kbps.is_some() {
+            assert!(a.keyframe_bytes.is_some());
+            // One stream over both copies: the second copy costs less than a fresh start.
+            assert!(c.kbps < b.kbps, "{} {} {}", a.name, c.kbps, b.kbps);
+        }
+    }
+    assert!(matches!(
+        run(&mut renderer, 2, 4),
+        Err(fovea::bench::CodecBenchError::Stretch { .. })
+    ));
 }

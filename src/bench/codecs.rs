@@ -13,7 +13,6 @@ use super::run::RADIOSITY_WAIT;
 use crate::encode::foveated::{low_pass, LowPass};
 use crate::encode::h264::{H264Config, H264Stream, DEFAULT_KEYFRAME_S};
 use crate::encode::{encode, inset, inset_packed, yuv, EncodeError};
-use crate::gaze::formats::Recording;
 use crate::protocol::{Codec, Display};
 use crate::quality::{flip_map, foveal_mask, pixels_per_degree, pooled_mean};
 use crate::render::{FrameRequest, RenderError, Renderer};
@@ -28,8 +27,14 @@ pub struct CodecOptions {
     pub scene: String,
     pub width: u32,
     pub height: u32,
-    /// One normalised gaze point per frame (see [`gaze_path`]).
+    /// One normalised gaze point per frame (see [`gaze_path`]): one stretch of the recording,
+    /// or several laid end to end.
     pub path: Vec<[f64; 2]>,
+    /// Frames in each stretch of `path`. Each stretch is its own stream, as if a session
+    /// started there: a fresh H.264 encoder (a keyframe), fresh render history, the clock from
+    /// 0. Several stretches pool one report over more of the recording than one stream's
+    /// frames, whose bytes depend on where in it they fall (docs/encoding.md).
+    pub stretch_frames: usize,
     /// Where the path came from, for the report.
     pub recording: String,
     pub configs: Vec<CodecConfig>,
@@ -52,6 +57,8 @@ pub enum CodecBenchError {
     Decode { config: String, message: String },
     #[error("the recording has no gaze the server would show from {from_s} s on")]
     NoGaze { from_s: f64 },
+    #[error("{frames} frames cannot be cut into stretches of {stretch}")]
+    Stretch { frames: usize, stretch: usize },
     #[error("{frames} frames of {width}x{height}: H.264 needs an even width and height")]
     OddSize {
         frames: usize,
@@ -62,39 +69,12 @@ pub enum CodecBenchError {
     Picture { path: String, message: String },
 }
 
-/// `frames` gaze points one 1/60 s apart from `from_s` seconds into the recording: at each
-/// time, the first sample at or after it that replay would send (so track loss holds the
-/// next good sample, as the server would show). Past the recording's end the last good sample
-/// holds.
-pub fn gaze_path(
-    rec: &Recording,
-    from_s: f64,
-    frames: usize,
-) -> Result<Vec<[f64; 2]>, CodecBenchError> {
-    let t0 = rec.samples.first().map(|s| s.t_ms).unwrap_or(0.0) + from_s * 1e3;
-    let mut out = Vec::with_capacity(frames);
-    let mut last = None;
-    for k in 0..frames {
-        let t = t0 + k as f64 * 1e3 / FPS;
-        let i = rec.samples.partition_point(|s| s.t_ms < t);
-        let g = rec.samples[i..]
-            .iter()
-            .find_map(crate::gaze::sendable)
-            .or(last);
-        let Some(g) = g else {
-            return Err(CodecBenchError::NoGaze { from_s });
-        };
-        last = Some(g);
-        out.push(g);
-    }
-    Ok(out)
-}
-
 /// What one configuration measured.
 #[derive(Default)]
 struct Tally {
     bytes: Vec<f64>,
-    keyframe_bytes: Option<f64>,
+    /// Each stretch's first frame.
+    keyframe_bytes: Vec<f64>,
     encode_ms: Vec<f64>,
     foveal: Vec<f64>,
     whole: Vec<f64>,
@@ -116,6 +96,13 @@ pub fn run_codecs(
             frames: opts.path.len(),
             width: w,
             height: h,
+        });
+    }
+    let n = opts.stretch_frames;
+    if n == 0 || opts.path.len() % n != 0 {
+        return Err(CodecBenchError::Stretch {
+            frames: opts.path.len(),
+            stretch: n,
         });
     }
     let started = Instant::now();
@@ -141,12 +128,16 @@ pub fn run_codecs(
             break;
         }
         // As a session renders: its default preset, one history stream, the clock at 60 fps
-        // (animated lights move), so consecutive frames differ as they do on the wire.
+        // (animated lights move), so consecutive frames differ as they do on the wire. A new
+        // stretch starts as a new session would.
+        if k % n == 0 {
+            renderer.release_stream(1);
+        }
         let mut req = FrameRequest::new(&opts.scene, w, h);
         req.gaze = [g[0] as f32, g[1] as f32];
         req.settings = RenderSettings::of(Preset::DEFAULT);
         req.stream = 1;
-        req.time_s = k as f64 / FPS;
+        req.time_s = (k % n) as f64 / FPS;
         if opts.orbit_deg_per_s != 0.0 {
             let yaw = opts.orbit_deg_per_s * req.time_s;
             req.camera = Some(base_camera.orbit(yaw as f32, 0.0));
@@ -161,7 +152,7 @@ pub fn run_codecs(
             break;
         }
         let mut tick = |k: usize| progress(done + k + 1, total, &config.name);
-        let (t, last) = measure(config, &frames, &viewing, &mut tick)?;
+        let (t, last) = measure(config, &frames, n, &viewing, &mut tick)?;
         done += frames.len();
         if let Some(dir) = &opts.pictures {
             save(dir, &slug(&config.name), &last, w, h)?;
@@ -171,8 +162,8 @@ pub fn run_codecs(
             family: config.family(),
             config: config.clone(),
             bytes: Spread::of(&t.bytes),
-            keyframe_bytes: t.keyframe_bytes,
-            kbps: kbps_at_fps(&t.bytes, t.keyframe_bytes),
+            keyframe_bytes: (!t.keyframe_bytes.is_empty()).then(|| mean(&t.keyframe_bytes)),
+            kbps: kbps_at_fps(&t.bytes, &t.keyframe_bytes),
             flip_fovea: mean(&t.foveal),
             flip: mean(&t.whole),
             encode_ms: Spread::of(&t.encode_ms),
@@ -223,11 +214,13 @@ fn score(viewing: &Viewing, reference: &[u8], shown: &[u8], g: [f64; 2]) -> (f64
     (pooled_mean(&map, &fovea), mean(&map))
 }
 
-/// Encodes every frame with one configuration (one H.264 stream over all of them), decodes
-/// each as the page would show it and scores it. Returns the tally and the last frame shown.
+/// Encodes every frame with one configuration (one H.264 stream over each `stretch` of them),
+/// decodes each as the page would show it and scores it. Returns the tally and the last frame
+/// shown.
 fn measure(
     config: &CodecConfig,
     frames: &Frames,
+    stretch: usize,
     viewing: &Viewing,
     tick: &mut dyn FnMut(usize),
 ) -> Result<(Tally, Vec<u8>), CodecBenchError> {
@@ -240,22 +233,32 @@ fn measure(
         config: config.name.clone(),
         message,
     };
-    // One keyframe at the start; the report adds the session's periodic ones to the bitrate,
-    // rather than letting the wall clock of a slow run decide where they fall.
-    let mut stream = config.h264_kbps.map(|kbps| {
-        H264Stream::new(H264Config {
-            kbps,
-            keyframe_every: Duration::from_secs(24 * 3600),
+    // One keyframe at each stretch's start; the report adds the session's periodic ones to the
+    // bitrate, rather than letting the wall clock of a slow run decide where they fall.
+    let new_stream = || {
+        config.h264_kbps.map(|kbps| {
+            H264Stream::new(H264Config {
+                kbps,
+                keyframe_every: Duration::from_secs(24 * 3600),
+            })
         })
-    });
-    let mut decoder = match stream {
-        Some(_) => Some(openh264::decoder::Decoder::new().map_err(|e| decode_err(e.to_string()))?),
-        None => None,
     };
+    let (mut stream, mut decoder) = (None, None);
     let acuity = LowPass::default();
     let mut t = Tally::default();
     let mut shown = Vec::new();
     for (k, (g, rgba)) in frames.iter().enumerate() {
+        let first = k % stretch == 0;
+        if first {
+            stream = new_stream();
+            decoder = match stream {
+                Some(_) => {
+                    let d = openh264::decoder::Decoder::new();
+                    Some(d.map_err(|e| decode_err(e.to_string()))?)
+                }
+                None => None,
+            };
+        }
         let start = Instant::now();
         // Borrowed where nothing filters it: a session encodes the readback in place, and a
         // copy (3.7 MB at 720p) would be timed as encoding.
@@ -267,7 +270,7 @@ fn measure(
             rgba
         };
         // Timed as frames at FPS: the rate control spends the bitrate over that time.
-        let ms = (k as f64 * 1e3 / FPS) as u64;
+        let ms = ((k % stretch) as f64 * 1e3 / FPS) as u64;
         let mut h264 = |s: &mut H264Stream, picture: &[u8], pw: u32, ph: u32| {
             let f = s.encode_at(picture, pw, ph, ms).map_err(encode_err)?;
             t.encode_ms.push(start.elapsed().as_secs_f64() * 1e3);
@@ -318,10 +321,10 @@ fn measure(
                 (b.len(), false)
             }
         };
-        // The stream's first keyframe is the periodic one the report spreads over 2 s; any
-        // later one (the rate guard changing the quantiser's range) is a frame's cost.
-        if keyframe && k == 0 {
-            t.keyframe_bytes = Some(bytes as f64);
+        // A stream's first keyframe is the periodic one the report spreads over 2 s; any later
+        // one (the rate guard changing the quantiser's range) is a frame's cost.
+        if keyframe && first {
+            t.keyframe_bytes.push(bytes as f64);
         } else {
             t.bytes.push(bytes as f64);
         }
@@ -339,16 +342,15 @@ fn decode_image(bytes: &[u8]) -> Result<Vec<u8>, String> {
         .map_err(|e| e.to_string())
 }
 
-/// Bits per second at [`FPS`] in kbit/s: the P-frames' mean plus a keyframe every
-/// [`DEFAULT_KEYFRAME_S`] seconds, as a session sends them.
-fn kbps_at_fps(bytes: &[f64], keyframe: Option<f64>) -> f64 {
+/// Bits per second at [`FPS`] in kbit/s: the P-frames' mean plus a keyframe (the stretches'
+/// mean) every [`DEFAULT_KEYFRAME_S`] seconds, as a session sends them.
+fn kbps_at_fps(bytes: &[f64], keyframes: &[f64]) -> f64 {
     let m = if bytes.is_empty() { 0.0 } else { mean(bytes) };
-    let per_s = match keyframe {
-        Some(k) => {
-            let n = FPS * DEFAULT_KEYFRAME_S;
-            (k + (n - 1.0) * m) / DEFAULT_KEYFRAME_S
-        }
-        None => m * FPS,
+    let per_s = if keyframes.is_empty() {
+        m * FPS
+    } else {
+        let n = FPS * DEFAULT_KEYFRAME_S;
+        (mean(keyframes) + (n - 1.0) * m) / DEFAULT_KEYFRAME_S
     };
     per_s * 8.0 / 1e3
 }
@@ -426,53 +428,16 @@ fn floors(frames: &Frames, viewing: &Viewing) -> Vec<FloorRow> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::gaze::formats::Format;
-    use crate::gaze::Sample;
-
-    fn recording(samples: &[(f64, Option<[f64; 2]>)]) -> Recording {
-        Recording {
-            format: Format::Generic,
-            samples: samples
-                .iter()
-                .map(|&(t_ms, xy)| Sample {
-                    t_ms,
-                    xy,
-                    pupil_mm: None,
-                })
-                .collect(),
-            pupil_rule: None,
-            eye: None,
-            screen: None,
-            saccades: None,
-        }
-    }
-
-    #[test]
-    fn the_path_takes_the_next_sendable_sample_and_holds_the_last_past_the_end() {
-        // Samples at 1000, 1010, 1020 and 1040 ms; the second is lost, the third far off the
-        // frame (replay sends neither).
-        let rec = recording(&[
-            (1000.0, Some([0.1, 0.1])),
-            (1010.0, None),
-            (1020.0, Some([5.0, 5.0])),
-            (1040.0, Some([0.6, 0.4])),
-        ]);
-        let path = gaze_path(&rec, 0.0, 4).unwrap();
-        // Frames at 0, 16.7, 33.3 and 50 ms after the first sample.
-        assert_eq!(path, vec![[0.1, 0.1], [0.6, 0.4], [0.6, 0.4], [0.6, 0.4]]);
-        assert!(matches!(
-            gaze_path(&rec, 1.0, 2),
-            Err(CodecBenchError::NoGaze { .. })
-        ));
-        assert!(gaze_path(&recording(&[]), 0.0, 1).is_err());
-    }
 
     #[test]
     fn the_bitrate_spreads_one_keyframe_over_each_two_seconds() {
         // 120 frames in 2 s: one keyframe of 60 000 bytes and 119 P-frames of 1000.
-        let kbps = kbps_at_fps(&[1000.0, 1000.0], Some(60_000.0));
+        let kbps = kbps_at_fps(&[1000.0, 1000.0], &[60_000.0]);
         assert!((kbps - (60_000.0 + 119_000.0) * 8.0 / 2.0 / 1e3).abs() < 1e-9);
-        assert!((kbps_at_fps(&[1000.0], None) - 480.0).abs() < 1e-9);
-        assert_eq!(kbps_at_fps(&[], None), 0.0);
+        // Two stretches' keyframes: their mean.
+        let pooled = kbps_at_fps(&[1000.0, 1000.0], &[50_000.0, 70_000.0]);
+        assert!((pooled - kbps).abs() < 1e-9);
+        assert!((kbps_at_fps(&[1000.0], &[]) - 480.0).abs() < 1e-9);
+        assert_eq!(kbps_at_fps(&[], &[]), 0.0);
     }
 }

@@ -10,18 +10,20 @@ mod codecs;
 mod codecs_report;
 mod configs;
 mod foveation_cost;
+mod gaze_path;
 mod ground_truth;
 mod report;
 mod run;
 
 pub use codec_configs::{codec_configs, CodecConfig};
-pub use codecs::{gaze_path, run_codecs, CodecBenchError, CodecOptions, FPS};
+pub use codecs::{run_codecs, CodecBenchError, CodecOptions, FPS};
 pub use codecs_report::{
     at_quality, write_codec_reports, AtQuality, CodecReport, CodecRow, EqualQuality, FloorRow,
     TARGET,
 };
 pub use configs::{sweep, BenchConfig};
 pub use foveation_cost::bound_vs_full;
+pub use gaze_path::{gaze_path, gaze_stretches};
 pub use ground_truth::{GroundTruth, GroundTruthError};
 pub use report::{pareto_front, write_reports, BenchRecord, BenchReport, ReferenceTruth, Spread};
 pub use run::{run, BenchOptions, Progress};

@@ -62,9 +62,11 @@ pub struct BenchArgs {
     /// `--sweep codecs`: the recording's screen WxH, for formats in pixels.
     #[arg(long)]
     pub screen: Option<String>,
-    /// `--sweep codecs`: start this many seconds into the recording.
-    #[arg(long, default_value_t = 0.0)]
-    pub gaze_from_s: f64,
+    /// `--sweep codecs`: start this many seconds into the recording. Several, comma-separated
+    /// (e.g. 5,10,15,20), measure --frames from each as a stream of its own and pool them in
+    /// one report: a short stream's bytes depend on where in the recording it falls.
+    #[arg(long, value_delimiter = ',', default_value = "0")]
+    pub gaze_from_s: Vec<f64>,
     /// `--sweep codecs`: also write each configuration's last frame as the page would show it
     /// (and the lossless frame) to OUT/codecs/*.png.
     #[arg(long)]

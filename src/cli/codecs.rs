@@ -24,8 +24,11 @@ pub fn bench_codecs(a: BenchArgs) -> Result<()> {
     }
     fovea::scene::Scene::builtin(scene)?;
     let (width, height) = parse_size(&a.size)?;
-    if !a.gaze_from_s.is_finite() || a.gaze_from_s < 0.0 {
-        bail!("--gaze-from-s must be a time ≥ 0 s, got {}", a.gaze_from_s);
+    if let Some(t) = a.gaze_from_s.iter().find(|t| !t.is_finite() || **t < 0.0) {
+        bail!("--gaze-from-s must be times ≥ 0 s, got {t}");
+    }
+    if a.gaze_from_s.is_empty() {
+        bail!("--gaze-from-s needs a time (0 for the recording's start)");
     }
     if !a.orbit_deg_per_s.is_finite() || a.orbit_deg_per_s.abs() > 360.0 {
         bail!(
@@ -34,19 +37,26 @@ pub fn bench_codecs(a: BenchArgs) -> Result<()> {
         );
     }
     let rec = a.read.load(file, a.screen.as_deref())?;
-    let path = fovea::bench::gaze_path(&rec, a.gaze_from_s, a.frames as usize)
+    let path = fovea::bench::gaze_stretches(&rec, &a.gaze_from_s, a.frames as usize)
         .with_context(|| format!("following {}", file.display()))?;
+    let froms: Vec<String> = a.gaze_from_s.iter().map(|t| t.to_string()).collect();
     let opts = fovea::bench::CodecOptions {
         scene: scene.to_string(),
         width,
         height,
         path,
+        stretch_frames: a.frames as usize,
         recording: format!(
-            "{} from {} s",
+            "{} from {} s{}",
             file.file_name().map_or(file.display().to_string(), |n| n
                 .to_string_lossy()
                 .into_owned()),
-            a.gaze_from_s
+            froms.join(", "),
+            if froms.len() > 1 {
+                format!(" ({} frames from each, a stream apiece)", a.frames)
+            } else {
+                String::new()
+            }
         ),
         configs: chosen(a.only.as_deref())?,
         display: fovea::protocol::Display {
