@@ -136,7 +136,8 @@ enum Command {
     /// result against direct light only and radiosity off; writes DIR/radiosity.json, .md and
     /// the direct / with-radiosity images.
     Radiosity(RadiosityArgs),
-    /// Redraw the plots of a bench.json, codecs.json or load.json (SVG and PNG beside it).
+    /// Redraw the plots of a bench.json, codecs.json or load.json (SVG and PNG beside it); a
+    /// codecs.json's codecs.md is rewritten too, its read-offs as this build computes them.
     Plot {
         /// A bench.json or codecs.json (fovea bench) or load.json (fovea load).
         file: PathBuf,
@@ -250,13 +251,21 @@ fn plot(file: &std::path::Path) -> Result<()> {
         fovea::plot::write(&plot, &dir.join("bench"))?;
         eprintln!("wrote {}/bench.svg and bench.png", dir.display());
     } else if json.get("equal_quality").is_some() {
-        let report: fovea::bench::CodecReport = serde_json::from_value(json)
+        let mut report: fovea::bench::CodecReport = serde_json::from_value(json)
             .with_context(|| format!("{} is not a codecs report", file.display()))?;
+        // A report from an earlier build gains the read-offs added since.
+        report.finish();
         fovea::plot::write(
             &fovea::plot::codecs::CodecPlot::of(&report),
             &dir.join("codecs"),
         )?;
-        eprintln!("wrote {}/codecs.svg and codecs.png", dir.display());
+        let md = dir.join("codecs.md");
+        std::fs::write(&md, report.markdown())
+            .with_context(|| format!("writing {}", md.display()))?;
+        eprintln!(
+            "wrote {}/codecs.svg, codecs.png and codecs.md",
+            dir.display()
+        );
     } else {
         bail!(
             "{}: neither a bench.json, a codecs.json nor a load.json",

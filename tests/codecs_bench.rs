@@ -104,6 +104,19 @@ fn the_codec_sweep_measures_every_configuration_on_the_same_frames() {
     );
     let jpeg = &report.equal_quality[0];
     assert!((jpeg.vs_target.unwrap() - 1.0).abs() < 1e-9);
+    // Foveated families are also read at the strictest foveal FLIP they and their plain codec
+    // reach.
+    for e in &report.equal_quality {
+        assert_eq!(
+            e.at_strictest.is_some(),
+            e.family.contains(" + "),
+            "{}",
+            e.family
+        );
+    }
+    let best = report.equal_quality[2].at_strictest.unwrap();
+    let low = row("JPEG q95 + low-pass").flip_fovea;
+    assert_eq!(best.flip_fovea, row("JPEG q95").flip_fovea.max(low));
     assert!(report
         .markdown()
         .contains(&format!("At {TARGET}'s foveal quality")));
@@ -119,8 +132,9 @@ fn the_codec_sweep_measures_every_configuration_on_the_same_frames() {
     ] {
         assert!(dir.join(f).is_file(), "{f} written");
     }
-    // `fovea plot` redraws the chart from the JSON.
+    // `fovea plot` redraws the chart from the JSON, and rewrites the report's read-offs.
     std::fs::remove_file(dir.join("codecs.svg")).unwrap();
+    std::fs::remove_file(dir.join("codecs.md")).unwrap();
     let out = Command::new(env!("CARGO_BIN_EXE_fovea"))
         .arg("plot")
         .arg(dir.join("codecs.json"))
@@ -132,6 +146,8 @@ fn the_codec_sweep_measures_every_configuration_on_the_same_frames() {
         String::from_utf8_lossy(&out.stderr)
     );
     assert!(dir.join("codecs.svg").is_file());
+    let md = std::fs::read_to_string(dir.join("codecs.md")).unwrap();
+    assert_eq!(md, report.markdown());
     std::fs::remove_dir_all(&dir).ok();
 }
 

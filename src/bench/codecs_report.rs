@@ -64,6 +64,22 @@ pub struct EqualQuality {
     pub vs_target: Option<f64>,
     /// Bitrate over the same codec's without foveated encoding, at the same FLIP.
     pub vs_plain: Option<f64>,
+    /// The same comparison at a stricter quality: the best foveal FLIP that both this family
+    /// and the codec without foveated encoding reach. Around the target's FLIP the curves can
+    /// be nearly flat, where a small difference in FLIP moves the read-off a lot; this second
+    /// reading says whether the saving holds along the curve.
+    #[serde(default)]
+    pub at_strictest: Option<Strictest>,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct Strictest {
+    /// The higher of the two families' best (lowest) foveal FLIPs: both reach it.
+    pub flip_fovea: f64,
+    /// This family's bitrate there.
+    pub at: AtQuality,
+    /// That bitrate over the plain codec's there.
+    pub vs_plain: Option<f64>,
 }
 
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -128,6 +144,26 @@ pub fn at_quality(points: &[(f64, f64)], target: f64) -> AtQuality {
     AtQuality::Unreached
 }
 
+/// A foveated family against its plain codec at the best foveal FLIP both reach: none where
+/// either has no finite point.
+fn strictest(plain: &[(f64, f64)], here: &[(f64, f64)]) -> Option<Strictest> {
+    let best = |pts: &[(f64, f64)]| {
+        pts.iter()
+            .filter(|p| p.0 > 0.0 && p.0.is_finite())
+            .map(|p| p.1)
+            .filter(|f| f.is_finite())
+            .min_by(f64::total_cmp)
+    };
+    let flip = best(plain)?.max(best(here)?);
+    let at = at_quality(here, flip);
+    let own = at_quality(plain, flip);
+    Some(Strictest {
+        flip_fovea: flip,
+        at,
+        vs_plain: own.bytes().zip(at.bytes()).map(|(p, b)| b / p),
+    })
+}
+
 impl CodecReport {
     /// Fills `equal_quality`: every family's bitrate at the target's foveal FLIP. Bitrates, not
     /// median frames, so H.264's keyframes count as they do on the wire.
@@ -143,26 +179,27 @@ impl CodecReport {
             .map(|r| (r.family.as_str(), r.config.plain_family()))
             .collect();
         families.dedup();
-        let at = |family: &str| {
-            let pts: Vec<(f64, f64)> = self
-                .rows
+        let points = |family: &str| -> Vec<(f64, f64)> {
+            self.rows
                 .iter()
                 .filter(|r| r.family == family)
                 .map(|r| (r.kbps, r.flip_fovea))
-                .collect();
-            at_quality(&pts, goal)
+                .collect()
         };
+        let ratio =
+            |here: AtQuality, plain: AtQuality| plain.bytes().zip(here.bytes()).map(|(p, b)| b / p);
         for (family, plain) in families {
-            let here = at(family);
-            let plain = (plain != family).then(|| at(&plain));
+            let here = at_quality(&points(family), goal);
+            let foveated = plain != family;
+            let at_strictest = foveated.then(|| strictest(&points(&plain), &points(family)));
             self.equal_quality.push(EqualQuality {
                 family: family.to_string(),
                 at: here,
                 vs_target: here.bytes().map(|b| b / goal_kbps),
-                vs_plain: plain
-                    .and_then(|p| p.bytes())
-                    .zip(here.bytes())
-                    .map(|(p, b)| b / p),
+                vs_plain: foveated
+                    .then(|| ratio(here, at_quality(&points(&plain), goal)))
+                    .flatten(),
+                at_strictest: at_strictest.flatten(),
             });
         }
     }
@@ -213,20 +250,36 @@ impl CodecReport {
         }
         if let Some(t) = self.rows.iter().find(|r| r.name == TARGET) {
             s.push_str(&format!(
-                "\n## At {TARGET}'s foveal quality (FLIP {:.4}, {:.0} kbit/s)\n\nEach family's bitrate where its curve crosses that FLIP (log bitrate interpolated between the two configurations around it; a configuration another of the family beats on both bitrate and FLIP is left out).\n\n| family | kbit/s at 60 fps | vs {TARGET} | vs the same codec without foveated encoding |\n|---|---:|---:|---:|\n",
+                "\n## At {TARGET}'s foveal quality (FLIP {:.4}, {:.0} kbit/s)\n\nEach family's bitrate where its curve crosses that FLIP (log bitrate interpolated between the two configurations around it; a configuration another of the family beats on both bitrate and FLIP is left out). The last column reads the same comparison at the best foveal FLIP both the family and its codec without foveated encoding reach.\n\n| family | kbit/s at 60 fps | vs {TARGET} | vs the same codec without foveated encoding | the same at the best foveal FLIP both reach |\n|---|---:|---:|---:|---:|\n",
                 t.flip_fovea, t.kbps
             ));
             let pct = |v: Option<f64>| v.map_or("–".into(), |v| format!("{:.1}%", 100.0 * v));
+            let bound = |a: AtQuality| {
+                if matches!(a, AtQuality::AtMost(_)) {
+                    "≤ "
+                } else {
+                    ""
+                }
+            };
             for e in &self.equal_quality {
                 let bytes = match e.at {
                     AtQuality::Interpolated(b) => format!("{b:.0}"),
                     AtQuality::AtMost(b) => format!("≤ {b:.0}"),
                     AtQuality::Unreached => "not reached".into(),
                 };
+                let best = e.at_strictest.map_or("–".into(), |p| match p.at {
+                    AtQuality::Unreached => format!("not reached (FLIP {:.4})", p.flip_fovea),
+                    a => format!("{}{} (FLIP {:.4})", bound(a), pct(p.vs_plain), p.flip_fovea),
+                });
                 s.push_str(&format!(
-                    "| {} | {bytes} | {} | {} |\n",
+                    "| {} | {bytes} | {} | {}{} | {best} |\n",
                     e.family,
                     pct(e.vs_target),
+                    if e.vs_plain.is_some() {
+                        bound(e.at)
+                    } else {
+                        ""
+                    },
                     pct(e.vs_plain)
                 ));
             }
@@ -300,5 +353,30 @@ mod tests {
         let cheap = [(300.0, 0.2), front[0], front[1], front[2]];
         assert_eq!(at_quality(&cheap, 0.0602), a);
         assert_eq!(at_quality(&cheap, 0.3), AtQuality::AtMost(300.0));
+    }
+
+    #[test]
+    fn a_foveated_family_is_also_read_at_the_strictest_quality_both_reach() {
+        let plain = [(700.0, 0.060), (1000.0, 0.059), (4000.0, 0.049)];
+        // Cheaper everywhere, and better than the codec's best: read at the codec's 0.049,
+        // between its own last two points.
+        let foveated = [(400.0, 0.0595), (1500.0, 0.050), (2000.0, 0.047)];
+        let p = strictest(&plain, &foveated).unwrap();
+        assert_eq!(p.flip_fovea, 0.049);
+        let b = p.at.bytes().unwrap();
+        assert!(b > 1500.0 && b < 2000.0, "{b}");
+        assert!((p.vs_plain.unwrap() - b / 4000.0).abs() < 1e-12);
+        // A family that stops short of the codec's best is read at its own best, where the
+        // codec's bitrate is interpolated.
+        let short = [(400.0, 0.0595), (1500.0, 0.055)];
+        let p = strictest(&plain, &short).unwrap();
+        assert_eq!(
+            (p.flip_fovea, p.at),
+            (0.055, AtQuality::Interpolated(1500.0))
+        );
+        let own = at_quality(&plain, 0.055).bytes().unwrap();
+        assert!(own > 1000.0 && own < 4000.0, "{own}");
+        assert!((p.vs_plain.unwrap() - 1500.0 / own).abs() < 1e-12);
+        assert_eq!(strictest(&[], &foveated), None);
     }
 }
