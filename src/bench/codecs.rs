@@ -99,7 +99,7 @@ pub fn run_codecs(
         });
     }
     let n = opts.stretch_frames;
-    if n == 0 || opts.path.len() % n != 0 {
+    if n == 0 || !opts.path.len().is_multiple_of(n) {
         return Err(CodecBenchError::Stretch {
             frames: opts.path.len(),
             stretch: n,
