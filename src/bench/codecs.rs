@@ -80,7 +80,9 @@ struct Tally {
     whole: Vec<f64>,
 }
 
-type Frames = [([f64; 2], Vec<u8>)];
+/// A frame's gaze and its lossless pixels.
+type Frame = ([f64; 2], Vec<u8>);
+type Frames = [Frame];
 
 /// Renders the path's frames once, then encodes, decodes and scores them with every
 /// configuration. `stop` ends the run early with what was measured.
@@ -122,30 +124,11 @@ pub fn run_codecs(
     renderer.settle_radiosity(&opts.scene, RADIOSITY_WAIT, &|| {
         stop.load(Ordering::Relaxed)
     })?;
-    let mut frames = Vec::new();
-    for (k, g) in opts.path.iter().enumerate() {
-        if stop.load(Ordering::Relaxed) {
-            break;
-        }
-        // As a session renders: its default preset, one history stream, the clock at 60 fps
-        // (animated lights move), so consecutive frames differ as they do on the wire. A new
-        // stretch starts as a new session would.
-        if k % n == 0 {
-            renderer.release_stream(1);
-        }
-        let mut req = FrameRequest::new(&opts.scene, w, h);
-        req.gaze = [g[0] as f32, g[1] as f32];
-        req.settings = RenderSettings::of(Preset::DEFAULT);
-        req.stream = 1;
-        req.time_s = (k % n) as f64 / FPS;
-        if opts.orbit_deg_per_s != 0.0 {
-            let yaw = opts.orbit_deg_per_s * req.time_s;
-            req.camera = Some(base_camera.orbit(yaw as f32, 0.0));
-        }
-        frames.push((*g, renderer.render(&req)?.rgba));
+    let mut tick = || {
         done += 1;
         progress(done, total, "rendering the path");
-    }
+    };
+    let frames = render_path(renderer, opts, &base_camera, stop, &mut tick)?;
     let mut rows = Vec::new();
     for config in &opts.configs {
         if stop.load(Ordering::Relaxed) || frames.is_empty() {
@@ -201,6 +184,40 @@ fn mean(v: &[f64]) -> f64 {
     v.iter().sum::<f64>() / v.len() as f64
 }
 
+/// The path's frames, rendered as a session renders: its default preset, one history stream,
+/// the clock at 60 fps (animated lights move), so consecutive frames differ as they do on the
+/// wire. Each stretch starts as a new session would.
+fn render_path(
+    renderer: &mut Renderer,
+    opts: &CodecOptions,
+    base_camera: &crate::scene::Camera,
+    stop: &AtomicBool,
+    tick: &mut dyn FnMut(),
+) -> Result<Vec<Frame>, CodecBenchError> {
+    let n = opts.stretch_frames;
+    let mut frames = Vec::new();
+    for (k, g) in opts.path.iter().enumerate() {
+        if stop.load(Ordering::Relaxed) {
+            break;
+        }
+        if k % n == 0 {
+            renderer.release_stream(1);
+        }
+        let mut req = FrameRequest::new(&opts.scene, opts.width, opts.height);
+        req.gaze = [g[0] as f32, g[1] as f32];
+        req.settings = RenderSettings::of(Preset::DEFAULT);
+        req.stream = 1;
+        req.time_s = (k % n) as f64 / FPS;
+        if opts.orbit_deg_per_s != 0.0 {
+            let yaw = opts.orbit_deg_per_s * req.time_s;
+            req.camera = Some(base_camera.orbit(yaw as f32, 0.0));
+        }
+        frames.push((*g, renderer.render(&req)?.rgba));
+        tick();
+    }
+    Ok(frames)
+}
+
 /// Mean FLIP within 5° of the gaze, and over the whole frame.
 fn score(viewing: &Viewing, reference: &[u8], shown: &[u8], g: [f64; 2]) -> (f64, f64) {
     let map = flip_map(
@@ -233,16 +250,6 @@ fn measure(
         config: config.name.clone(),
         message,
     };
-    // One keyframe at each stretch's start; the report adds the session's periodic ones to the
-    // bitrate, rather than letting the wall clock of a slow run decide where they fall.
-    let new_stream = || {
-        config.h264_kbps.map(|kbps| {
-            H264Stream::new(H264Config {
-                kbps,
-                keyframe_every: Duration::from_secs(24 * 3600),
-            })
-        })
-    };
     let (mut stream, mut decoder) = (None, None);
     let acuity = LowPass::default();
     let mut t = Tally::default();
@@ -250,14 +257,7 @@ fn measure(
     for (k, (g, rgba)) in frames.iter().enumerate() {
         let first = k % stretch == 0;
         if first {
-            stream = new_stream();
-            decoder = match stream {
-                Some(_) => {
-                    let d = openh264::decoder::Decoder::new();
-                    Some(d.map_err(|e| decode_err(e.to_string()))?)
-                }
-                None => None,
-            };
+            (stream, decoder) = fresh_stream(config)?;
         }
         let start = Instant::now();
         // Borrowed where nothing filters it: a session encodes the readback in place, and a
@@ -334,6 +334,26 @@ fn measure(
         tick(k);
     }
     Ok((t, shown))
+}
+
+/// A new H.264 stream and the decoder that shows it, for a configuration that has one. Its only
+/// keyframe is its first: the report adds the session's periodic ones to the bitrate, rather
+/// than letting the wall clock of a slow run decide where they fall.
+fn fresh_stream(
+    config: &CodecConfig,
+) -> Result<(Option<H264Stream>, Option<openh264::decoder::Decoder>), CodecBenchError> {
+    let Some(kbps) = config.h264_kbps else {
+        return Ok((None, None));
+    };
+    let stream = H264Stream::new(H264Config {
+        kbps,
+        keyframe_every: Duration::from_secs(24 * 3600),
+    });
+    let decoder = openh264::decoder::Decoder::new().map_err(|e| CodecBenchError::Decode {
+        config: config.name.clone(),
+        message: e.to_string(),
+    })?;
+    Ok((Some(stream), Some(decoder)))
 }
 
 fn decode_image(bytes: &[u8]) -> Result<Vec<u8>, String> {
