@@ -137,7 +137,7 @@ enum Command {
     /// the direct / with-radiosity images.
     Radiosity(RadiosityArgs),
     /// Redraw the plots of a bench.json, codecs.json or load.json (SVG and PNG beside it); a
-    /// codecs.json's codecs.md is rewritten too, its read-offs as this build computes them.
+    /// codecs report is rewritten too (json and md), its read-offs as this build computes them.
     Plot {
         /// A bench.json or codecs.json (fovea bench) or load.json (fovea load).
         file: PathBuf,
@@ -255,15 +255,10 @@ fn plot(file: &std::path::Path) -> Result<()> {
             .with_context(|| format!("{} is not a codecs report", file.display()))?;
         // A report from an earlier build gains the read-offs added since.
         report.finish();
-        fovea::plot::write(
-            &fovea::plot::codecs::CodecPlot::of(&report),
-            &dir.join("codecs"),
-        )?;
-        let md = dir.join("codecs.md");
-        std::fs::write(&md, report.markdown())
-            .with_context(|| format!("writing {}", md.display()))?;
+        fovea::bench::write_codec_reports(&report, dir)
+            .with_context(|| format!("writing reports to {}", dir.display()))?;
         eprintln!(
-            "wrote {}/codecs.svg, codecs.png and codecs.md",
+            "wrote {}/codecs.json, codecs.md, codecs.svg and codecs.png",
             dir.display()
         );
     } else {

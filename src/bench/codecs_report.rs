@@ -156,12 +156,16 @@ fn strictest(plain: &[(f64, f64)], here: &[(f64, f64)]) -> Option<Strictest> {
     };
     let flip = best(plain)?.max(best(here)?);
     let at = at_quality(here, flip);
-    let own = at_quality(plain, flip);
     Some(Strictest {
         flip_fovea: flip,
         at,
-        vs_plain: own.bytes().zip(at.bytes()).map(|(p, b)| b / p),
+        vs_plain: ratio(at, at_quality(plain, flip)),
     })
+}
+
+/// One bitrate over another, where both are known.
+fn ratio(here: AtQuality, plain: AtQuality) -> Option<f64> {
+    plain.bytes().zip(here.bytes()).map(|(p, b)| b / p)
 }
 
 impl CodecReport {
@@ -186,8 +190,6 @@ impl CodecReport {
                 .map(|r| (r.kbps, r.flip_fovea))
                 .collect()
         };
-        let ratio =
-            |here: AtQuality, plain: AtQuality| plain.bytes().zip(here.bytes()).map(|(p, b)| b / p);
         for (family, plain) in families {
             let here = at_quality(&points(family), goal);
             let foveated = plain != family;
