@@ -163,6 +163,60 @@ async fn an_h264_session_streams_keyframes_on_request_and_bad_requests_are_told(
     running.stop().await;
 }
 
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn a_foveated_h264_session_holds_its_periphery_and_every_frame_decodes() {
+    let (addr, running) = common::start(Default::default()).await;
+    let url = format!("ws://{addr}/ws");
+    for inset_deg in [None, Some(16.0)] {
+        let hello = Hello {
+            scene: "gallery".into(),
+            width: 320,
+            height: 192,
+            preset: "fast".into(),
+            codec: Codec::H264,
+            bitrate_kbps: Some(2000),
+            foveated_encoding: true,
+            inset_deg,
+            ..Hello::default()
+        };
+        let mut c = Client::connect(&url).await.unwrap();
+        c.hello(&hello).await.unwrap();
+        let mut decoder = Decoder::new().unwrap();
+        for seq in 0..6u64 {
+            if seq > 0 {
+                let gaze = Gaze {
+                    seq,
+                    t_ms: seq as f64,
+                    x: 0.4,
+                    y: 0.5,
+                    pupil_mm: None,
+                    sample_t_ms: None,
+                };
+                c.gaze(&gaze).await.unwrap();
+            }
+            let (header, image) = loop {
+                match c.next_event(Duration::from_secs(60)).await {
+                    Ok(Event::Frame { header, image }) => break (header, image),
+                    Ok(Event::Error(e)) => panic!("error {e:?}"),
+                    Ok(_) => continue,
+                    Err(e) => panic!("no frame: {e}"),
+                }
+            };
+            let ack = Ack {
+                frame: header.frame,
+                t_ms: None,
+                dropped: false,
+            };
+            c.ack(&ack).await.unwrap();
+            assert_eq!(header.keyframe, Some(seq == 0), "inset {inset_deg:?}");
+            let pic = decoder.decode(&image).expect("decodes").expect("a picture");
+            let (w, h) = openh264::formats::YUVSource::dimensions(&pic);
+            assert!(w >= 320 || inset_deg.is_some(), "{w}x{h}");
+        }
+    }
+    running.stop().await;
+}
+
 /// A 320×240 grey picture of fine detail, zoomed in by `step` percent: a camera moving in,
 /// which motion compensation cannot follow as it follows a pan.
 fn pattern(step: u64) -> Vec<u8> {
@@ -221,4 +275,49 @@ fn a_moving_picture_frees_the_quantiser_to_hold_the_bitrate() {
     );
     // Every frame decoded, across the new encoder's parameter sets.
     assert!(moving.iter().all(|f| f.2 > 20.0), "{moving:?}");
+}
+
+#[test]
+fn a_held_periphery_stops_recoding_a_still_picture() {
+    // openh264 below QP 18 re-codes a still picture in every P-frame (src/encode/h264.rs);
+    // with the periphery held, only the blocks near the gaze are re-coded.
+    let mut renderer = Renderer::new().unwrap_or_else(|e| panic!("GPU tests need an adapter: {e}"));
+    let (w, h) = (640, 360);
+    let rgba = renderer
+        .render(&FrameRequest::new("gallery", w, h))
+        .unwrap()
+        .rgba;
+    let viewing = fovea::viewing::Viewing::new(Default::default(), w, h);
+    let hold = fovea::encode::hold::Hold::default();
+    let config = H264Config {
+        kbps: 4000,
+        keyframe_every: Duration::from_secs(3600),
+    };
+    let mut last = Vec::new();
+    for held in [false, true] {
+        let mut stream = H264Stream::new(config);
+        let mut decoder = Decoder::new().unwrap();
+        let mut bytes = 0;
+        for k in 0..40u64 {
+            if held {
+                let t = fovea::encode::hold::thresholds(w, h, [0.5, 0.5], &viewing, &hold);
+                stream.hold_next(t);
+            }
+            let f = stream.encode_at(&rgba, w, h, k * 16).unwrap();
+            assert_eq!(f.keyframe, k == 0);
+            let back = decode(&mut decoder, &f.bytes);
+            if k >= 30 {
+                bytes += f.bytes.len();
+                let db = psnr(&rgba, &back);
+                assert!(db >= 35.0, "held {held}, frame {k}: {db:.1} dB");
+            }
+        }
+        last.push(bytes);
+    }
+    assert!(
+        2 * last[1] < last[0],
+        "the last 10 P-frames: {} bytes plain, {} held",
+        last[0],
+        last[1]
+    );
 }

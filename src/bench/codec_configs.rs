@@ -20,6 +20,10 @@ pub struct CodecConfig {
     /// A downscaled frame plus a foveal inset this many degrees wide (with H.264 both packed
     /// into one picture).
     pub inset_deg: Option<f64>,
+    /// The periphery's macroblocks held while they change by less than the eye can tell
+    /// there (`encode::hold`; H.264, whole frames).
+    #[serde(default)]
+    pub hold: bool,
 }
 
 impl CodecConfig {
@@ -52,11 +56,16 @@ impl CodecConfig {
             true => format!("inset {deg:.0}°"),
             false => format!("inset {deg:.1}°"),
         };
-        match (self.low_pass, self.inset_deg) {
+        let spatial = match (self.low_pass, self.inset_deg) {
             (false, Some(deg)) => Some(inset(deg)),
             (true, Some(deg)) => Some(format!("{} + low-pass", inset(deg))),
             (true, None) => Some("low-pass".into()),
             (false, None) => None,
+        };
+        match (spatial, self.hold) {
+            (Some(s), true) => Some(format!("{s} + hold")),
+            (None, true) => Some("hold".into()),
+            (s, false) => s,
         }
     }
 }
@@ -77,6 +86,7 @@ pub fn codec_configs() -> Vec<CodecConfig> {
         h264_kbps: None,
         low_pass,
         inset_deg,
+        hold: false,
     };
     for low in [false, true] {
         for q in [50u8, 75, 85, 95] {
@@ -113,6 +123,18 @@ pub fn codec_configs() -> Vec<CodecConfig> {
             codec: Codec::H264,
             ..jpeg(0, true, Some(narrowest))
         });
+    }
+    // The periphery held in time (`encode::hold`): alone, after the low-pass, and with the
+    // inset and the low-pass.
+    for (low_pass, inset) in [(false, None), (true, None), (true, Some(narrowest))] {
+        for kbps in H264_KBPS {
+            out.push(CodecConfig {
+                h264_kbps: Some(kbps),
+                codec: Codec::H264,
+                hold: true,
+                ..jpeg(0, low_pass, inset)
+            });
+        }
     }
     // A still image's inset is placed on the gaze every frame, with no hold to allow for:
     // its narrowest is 13.3° (`inset::narrowest_deg`). JPEG only (a video inset is held).
@@ -152,16 +174,27 @@ mod tests {
             assert!(names.contains(&n), "{n} in {names:?}");
         }
         assert_eq!(names.iter().filter(|n| n.contains("inset 20°")).count(), 11);
-        assert_eq!(names.iter().filter(|n| n.contains("inset 16°")).count(), 18);
+        assert_eq!(names.iter().filter(|n| n.contains("inset 16°")).count(), 25);
         // Inset and low-pass together are a family of their own, H.264 only.
         let both: Vec<_> = configs
             .iter()
-            .filter(|c| c.low_pass && c.inset_deg.is_some())
+            .filter(|c| c.low_pass && c.inset_deg.is_some() && !c.hold)
             .collect();
         assert_eq!(both.len(), 7);
         assert!(both
             .iter()
             .all(|c| c.codec == Codec::H264 && c.family() == "H.264 + inset 16° + low-pass"));
+        // The held periphery: three families of H.264, each named after all it does.
+        let held: Vec<_> = configs.iter().filter(|c| c.hold).collect();
+        assert_eq!(held.len(), 21);
+        assert!(held.iter().all(|c| c.codec == Codec::H264));
+        for n in [
+            "H.264 1000 kbit/s + hold",
+            "H.264 1000 kbit/s + low-pass + hold",
+            "H.264 1000 kbit/s + inset 16° + low-pass + hold",
+        ] {
+            assert!(names.contains(&n), "{n} in {names:?}");
+        }
         // The still inset's derived width, JPEG only.
         assert!(names.contains(&"JPEG q85 + inset 13.3°"), "{names:?}");
         assert_eq!(

@@ -12,6 +12,7 @@ use super::report::{Machine, Spread};
 use super::run::RADIOSITY_WAIT;
 use crate::encode::foveated::{low_pass, LowPass};
 use crate::encode::h264::{H264Config, H264Stream, DEFAULT_KEYFRAME_S};
+use crate::encode::hold::{self, Hold};
 use crate::encode::{encode, inset, inset_packed, yuv, EncodeError};
 use crate::protocol::{Codec, Display};
 use crate::quality::{flip_map, foveal_mask, pixels_per_degree, pooled_mean};
@@ -286,6 +287,9 @@ fn measure(
         };
         let (bytes, keyframe) = match (&mut stream, config.inset_deg) {
             (Some(s), None) => {
+                if config.hold {
+                    s.hold_next(hold::thresholds(w, h, *g, viewing, &Hold::default()));
+                }
                 let (picture, n, key) = h264(s, input, w, h)?;
                 shown = picture;
                 (n, key)
@@ -295,6 +299,17 @@ fn measure(
                 let plan = inset_packed::follow(s.held_inset(), w, h, *g, viewing, deg, &acuity);
                 let (base, crop) = inset::split(input, w, h, &plan);
                 let (packed, l) = inset_packed::pack(&base, &crop, &plan, w, h);
+                if config.hold {
+                    let t = inset_packed::hold_thresholds(
+                        &plan,
+                        &l,
+                        (w, h),
+                        *g,
+                        viewing,
+                        &Hold::default(),
+                    );
+                    s.hold_next(t);
+                }
                 let (picture, n, key) = h264(s, &packed, l.width, l.height)?;
                 s.hold_inset(plan);
                 let (b_px, i_px) = inset_packed::unpack(&picture, &l, &plan, w, h);

@@ -15,7 +15,6 @@ use openh264::encoder::{
     BitRate, Encoder, EncoderConfig, FrameRate, FrameType, Profile, QpRange, RateControlMode,
     SpsPpsStrategy, UsageType, VuiConfig,
 };
-use openh264::formats::YUVSource;
 
 use super::yuv::I420;
 
@@ -25,6 +24,7 @@ enum Picture<'a> {
     I420(&'a [u8]),
 }
 
+use openh264::formats::YUVSource;
 use openh264::{OpenH264API, Timestamp};
 
 use super::rate_guard::{RateGuard, Switch};
@@ -109,6 +109,16 @@ pub struct H264Stream {
     inset: Option<super::inset::InsetPlan>,
     /// The quantiser's range: quality while the picture is still, the target once it moves.
     guard: RateGuard,
+    /// Each macroblock's threshold for the next frame, where the periphery is held
+    /// (`encode::hold`), and the stream decoded as a client shows it, which held blocks repeat.
+    hold: Option<Vec<u8>>,
+    shown: Option<Shown>,
+}
+
+/// The stream as its decoder shows it: the previous frame's picture, tight I420.
+struct Shown {
+    decoder: openh264::decoder::Decoder,
+    picture: Option<I420>,
 }
 
 /// One encoded frame: Annex B NAL units.
@@ -141,6 +151,8 @@ impl H264Stream {
             yuv: None,
             inset: None,
             guard: RateGuard::default(),
+            hold: None,
+            shown: None,
         }
     }
 
@@ -152,6 +164,12 @@ impl H264Stream {
     /// Records where this picture's inset lies.
     pub fn hold_inset(&mut self, plan: super::inset::InsetPlan) {
         self.inset = Some(plan);
+    }
+
+    /// The next frame keeps the content of each macroblock that changed by no more than its
+    /// threshold (`encode::hold::thresholds` for the picture as encoded); a keyframe takes all.
+    pub fn hold_next(&mut self, thresholds: Vec<u8>) {
+        self.hold = Some(thresholds);
     }
 
     /// The next frame is a keyframe (a client's decoder failed, or it resized).
@@ -187,6 +205,11 @@ impl H264Stream {
                 // 4000 kbit/s); without it or adaptive quantisation, QP ≤ 22 reaches JPEG
                 // q85's foveal FLIP in ~5 kB P-frames, and the guard frees the quantiser
                 // where the picture moves too much for that (`rate_guard`).
+                //
+                // Below QP 18 openh264 never settles on a still picture: every P-frame re-codes
+                // it (460 bytes a frame on `bunny-marble`, 2438 on `gallery` at 720p, 13–17
+                // from QP 18 up), which is what `encode::hold` stops where the eye cannot
+                // tell; the floor stays at 10, whose refinement the fovea needs.
                 .qp(QpRange::new(
                     super::rate_guard::QpCap::MIN_QP,
                     self.guard.cap().max_qp(),
@@ -272,15 +295,6 @@ impl H264Stream {
                 got: len,
             });
         }
-        // One YUV buffer per stream, refilled each frame (1.4 MB at 720p not reallocated).
-        let yuv = match &mut self.yuv {
-            Some(buffer) if buffer.dimensions() == (w, h) => buffer,
-            slot => slot.insert(I420::new(w, h)),
-        };
-        match picture {
-            Picture::Rgba(rgba) => yuv.fill(rgba),
-            Picture::I420(planes) => yuv.copy_from(planes),
-        }
         // Strictly increasing, as rate control expects.
         let ms = ms.max(self.last_ms + 1);
         let since_last = ms - self.last_ms;
@@ -298,6 +312,8 @@ impl H264Stream {
         }
         self.ensure_encoder(width, height)?;
         let ask = self.keyframe_asked || due;
+        let hold = self.hold.take();
+        self.take_picture(picture, w, h, hold.as_deref().filter(|_| !ask));
         let Some(encoder) = self.encoder.as_mut() else {
             return Err(EncodeError::H264("no encoder".into()));
         };
@@ -325,6 +341,61 @@ impl H264Stream {
             self.keyframe_asked = false;
         }
         self.guard.record(bytes.len(), keyframe, since_last);
+        match hold {
+            Some(_) => self.show(&bytes, keyframe)?,
+            None => self.shown = None,
+        }
         Ok(H264Frame { bytes, keyframe })
+    }
+
+    /// Converts the frame into the stream's picture buffer and holds the blocks `hold` allows
+    /// (not on a keyframe: the caller passes none).
+    fn take_picture(&mut self, picture: Picture, w: usize, h: usize, hold: Option<&[u8]>) {
+        // One YUV buffer per stream, refilled each frame (1.4 MB at 720p not reallocated).
+        let yuv = match &mut self.yuv {
+            Some(buffer) if buffer.size() == (w, h) => buffer,
+            slot => slot.insert(I420::new(w, h)),
+        };
+        match picture {
+            Picture::Rgba(rgba) => yuv.fill(rgba),
+            Picture::I420(planes) => yuv.copy_from(planes),
+        }
+        let shown = self.shown.as_ref().and_then(|s| s.picture.as_ref());
+        if let (Some(t), Some(shown)) = (hold, shown) {
+            super::hold::merge(yuv, shown, t);
+        }
+    }
+
+    /// Decodes the frame just encoded, as the client will, for the next frame's hold. A
+    /// decoder starts at a keyframe; until one comes nothing is held.
+    fn show(&mut self, bytes: &[u8], keyframe: bool) -> Result<(), EncodeError> {
+        if keyframe || self.shown.is_none() {
+            self.shown = None;
+            if !keyframe {
+                return Ok(());
+            }
+            let decoder = openh264::decoder::Decoder::with_api_config(api()?, Default::default())
+                .map_err(|e| EncodeError::H264(format!("the hold's decoder: {e}")))?;
+            self.shown = Some(Shown {
+                decoder,
+                picture: None,
+            });
+        }
+        let Some(shown) = self.shown.as_mut() else {
+            return Ok(());
+        };
+        match shown.decoder.decode(bytes) {
+            Ok(Some(pic)) => {
+                let slot = &mut shown.picture;
+                let buffer = match slot {
+                    Some(b) if b.size() == pic.dimensions() => b,
+                    _ => slot.insert(I420::new(pic.dimensions().0, pic.dimensions().1)),
+                };
+                buffer.copy_from_source(&pic);
+            }
+            // Our own stream failed to decode: hold nothing until the next keyframe.
+            Ok(None) | Err(_) => self.shown = None,
+        }
+        Ok(())
     }
 }

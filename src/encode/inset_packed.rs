@@ -13,6 +13,7 @@
 use serde::{Deserialize, Serialize};
 
 use super::foveated::LowPass;
+use super::hold::{self, Hold};
 use super::inset::{self, InsetPlan};
 use crate::viewing::Viewing;
 
@@ -95,6 +96,55 @@ pub fn layout(plan: &InsetPlan, width: u32, height: u32) -> PackedLayout {
         width: even(inset_x + plan.width),
         height: even(bh.max(plan.height)),
     }
+}
+
+/// Each macroblock's hold threshold (`encode::hold`) in the packed picture of `plan`: a block
+/// by the frame pixels it shows (one of the padding by the part's edge it repeats), and a base
+/// block that the inset's unfeathered core covers, `hold::ALWAYS`: the client never shows it.
+pub fn hold_thresholds(
+    plan: &InsetPlan,
+    l: &PackedLayout,
+    (width, height): (u32, u32),
+    gaze: [f64; 2],
+    viewing: &Viewing,
+    hold: &Hold,
+) -> Vec<u8> {
+    let g = viewing.to_pixels(gaze);
+    let (bw, bh) = plan.base_size(width, height);
+    let (s, f) = (f64::from(plan.scale), inset::FEATHER);
+    let (px, py, pw, ph) = (plan.x, plan.y, plan.width, plan.height);
+    let core = [
+        f64::from(px) + f * f64::from(pw),
+        f64::from(py) + f * f64::from(ph),
+        f64::from(px + pw) - f * f64::from(pw),
+        f64::from(py + ph) - f * f64::from(ph),
+    ];
+    let (cols, rows) = hold::blocks(l.width as usize, l.height as usize);
+    let mut out = Vec::with_capacity(cols * rows);
+    for by in 0..rows as u32 {
+        for bx in 0..cols as u32 {
+            let m = hold::MB as u32;
+            let (x0, y0, x1, y1) = (bx * m, by * m, (bx + 1) * m, (by + 1) * m);
+            // The part's own pixels the block shows or repeats, in its own coordinates.
+            let clamp = |a0: u32, a1: u32, n: u32| (f64::from(a0.min(n - 1)), f64::from(a1.min(n)));
+            let rect = if x0 < l.inset_x {
+                let ((cx0, cx1), (cy0, cy1)) = (clamp(x0, x1, bw), clamp(y0, y1, bh));
+                let (fw, fh) = (f64::from(width), f64::from(height));
+                let r = [cx0 * s, cy0 * s, (cx1 * s).min(fw), (cy1 * s).min(fh)];
+                if r[0] >= core[0] && r[1] >= core[1] && r[2] <= core[2] && r[3] <= core[3] {
+                    out.push(hold::ALWAYS);
+                    continue;
+                }
+                r
+            } else {
+                let (ix, iy) = (clamp(x0 - l.inset_x, x1 - l.inset_x, pw), clamp(y0, y1, ph));
+                let (ox, oy) = (f64::from(px), f64::from(py));
+                [ox + ix.0, oy + iy.0, ox + ix.1, oy + iy.1]
+            };
+            out.push(hold::rect_threshold(rect, g, viewing, hold));
+        }
+    }
+    out
 }
 
 /// The picture (RGBA8, `layout`'s size) holding `base` (the plan's base size) and `inset`
@@ -262,5 +312,39 @@ mod tests {
         assert!(still < d);
         // The base's scale allows for the offsets: never coarser than a centred inset's.
         assert!(first.scale <= plan(w, h, [0.5, 0.5], &v, 20.0, &a).scale);
+    }
+
+    #[test]
+    fn held_blocks_follow_what_the_client_shows_of_each_part() {
+        let (w, h) = (1280, 720);
+        let v = Viewing::new(Display::default(), w, h);
+        let gaze = [0.3, 0.6];
+        let plan = follow(None, w, h, gaze, &v, 16.0, &LowPass::default());
+        let l = layout(&plan, w, h);
+        let t = hold_thresholds(&plan, &l, (w, h), gaze, &v, &Hold::default());
+        let (cols, rows) = hold::blocks(l.width as usize, l.height as usize);
+        assert_eq!(t.len(), cols * rows);
+        let at = |x: u32, y: u32| t[(y / 16) as usize * cols + (x / 16) as usize];
+        // The inset's block at the gaze takes every change.
+        let [gx, gy] = v.to_pixels(gaze);
+        let (ix, iy) = (l.inset_x + gx as u32 - plan.x, gy as u32 - plan.y);
+        assert_eq!(at(ix, iy), 0);
+        // The base's block under the gaze lies under the inset's core: never shown.
+        let s = f64::from(plan.scale);
+        assert_eq!(at((gx / s) as u32, (gy / s) as u32), hold::ALWAYS);
+        // The base's far corner holds, but not blindly; its padding as the edge it repeats.
+        let (bw, bh) = plan.base_size(w, h);
+        let corner = at(bw - 1, 0);
+        assert!(corner > 0 && corner < hold::ALWAYS, "{corner}");
+        if l.inset_x >= bw + 16 {
+            assert_eq!(at(l.inset_x - 1, 0), corner);
+        }
+        assert!(bh < l.height || at(0, bh - 1) > 0);
+        // No inset block is blind: the client shows all of the inset.
+        for y in (0..l.height).step_by(16) {
+            for x in (l.inset_x..l.width).step_by(16) {
+                assert!(at(x, y) < hold::ALWAYS, "({x}, {y})");
+            }
+        }
     }
 }

@@ -3,8 +3,10 @@
 
 pub mod foveated;
 pub mod h264;
+pub mod hold;
 pub mod inset;
 pub mod inset_packed;
+pub mod picture;
 pub mod rate_guard;
 pub mod yuv;
 

@@ -10,59 +10,7 @@
 //! steps, and on `bunny-marble` its round trip alone scored worse in the fovea than JPEG q85
 //! (docs/encoding.md). Chroma from the mean of each 2×2 block's RGB.
 
-/// One I420 picture (Y, then U, then V, tightly packed), as openh264 reads it.
-pub struct I420 {
-    data: Vec<u8>,
-    width: usize,
-    height: usize,
-}
-
-impl I420 {
-    pub fn new(width: usize, height: usize) -> I420 {
-        I420 {
-            data: vec![0; width * height * 3 / 2],
-            width,
-            height,
-        }
-    }
-
-    /// Refills the picture from I420 planes of the same size (Y, U, V, tight).
-    pub fn copy_from(&mut self, planes: &[u8]) {
-        self.data.copy_from_slice(planes);
-    }
-
-    /// Refills the picture from `rgba` of the same (even) size.
-    pub fn fill(&mut self, rgba: &[u8]) {
-        let (w, h) = (self.width, self.height);
-        let (y, chroma) = self.data.split_at_mut(w * h);
-        let (u, v) = chroma.split_at_mut(w * h / 4);
-        rgba_to_i420(rgba, w, h, y, u, v);
-    }
-}
-
-impl openh264::formats::YUVSource for I420 {
-    fn dimensions(&self) -> (usize, usize) {
-        (self.width, self.height)
-    }
-
-    fn strides(&self) -> (usize, usize, usize) {
-        (self.width, self.width / 2, self.width / 2)
-    }
-
-    fn y(&self) -> &[u8] {
-        &self.data[..self.width * self.height]
-    }
-
-    fn u(&self) -> &[u8] {
-        let n = self.width * self.height;
-        &self.data[n..n + n / 4]
-    }
-
-    fn v(&self) -> &[u8] {
-        let n = self.width * self.height;
-        &self.data[n + n / 4..]
-    }
-}
+pub use super::picture::I420;
 
 /// Writes the I420 planes of `rgba` (`width`×`height`, both even) into `y` (w·h), `u` and `v`
 /// (w/2 · h/2 each).
