@@ -10,6 +10,7 @@ use super::timing::FrameTimes;
 use crate::encode;
 use crate::encode::foveated::{self, LowPass};
 use crate::encode::h264::H264Stream;
+use crate::encode::hold::{self, Hold};
 use crate::encode::{inset, inset_packed};
 use crate::protocol::{
     encode_frame, Codec, ErrorCode, FrameHeader, GazeUsed, InsetHeader, ProtocolError,
@@ -106,6 +107,8 @@ pub async fn make(render: RenderHandle, job: FrameJob) -> Result<MadeFrame, Fram
     );
     let (codec, quality, w, h) = (job.codec, job.quality, frame.width, frame.height);
     let stream = job.h264.clone();
+    // Foveated encoding holds an H.264 stream's periphery (`encode::hold`) in the same geometry.
+    let hold = job.low_pass.as_ref().map(|(_, viewing)| *viewing);
     // Unless the renderer filtered the frame already.
     let low_pass = job.low_pass.filter(|_| !frame.low_passed);
     let (inset, gaze) = (job.inset, job.request.gaze);
@@ -124,11 +127,17 @@ pub async fn make(render: RenderHandle, job: FrameJob) -> Result<MadeFrame, Fram
                 .map_err(|_| encode::EncodeError::H264("the stream's lock was poisoned".into()))
                 .and_then(|mut s| match (&i420, inset) {
                     (_, Some((deg, viewing))) => {
-                        encode_packed(&mut s, &rgba, w, h, g, &viewing, deg)
+                        encode_packed(&mut s, &rgba, (w, h), g, &viewing, deg, hold.is_some())
                     }
                     // Converted (and low-passed, if asked) on the GPU.
-                    (Some(planes), None) => s.encode_i420(planes, w, h).map(|f| (f, None)),
-                    (None, None) => s.encode(&rgba, w, h).map(|f| (f, None)),
+                    (Some(planes), None) => {
+                        hold_periphery(&mut s, hold.as_ref(), w, h, g);
+                        s.encode_i420(planes, w, h).map(|f| (f, None))
+                    }
+                    (None, None) => {
+                        hold_periphery(&mut s, hold.as_ref(), w, h, g);
+                        s.encode(&rgba, w, h).map(|f| (f, None))
+                    }
                 })
                 .map(|(f, i)| (f.bytes, Some(f.keyframe), i)),
             (_, _, Some((deg, viewing))) => {
@@ -204,21 +213,34 @@ fn encode_inset(
     Ok((bytes, header))
 }
 
+/// Holds the next frame's periphery where foveated encoding is on (`encode::hold`).
+fn hold_periphery(stream: &mut H264Stream, viewing: Option<&Viewing>, w: u32, h: u32, g: [f64; 2]) {
+    if let Some(viewing) = viewing {
+        stream.hold_next(hold::thresholds(w, h, g, viewing, &Hold::default()));
+    }
+}
+
 /// An H.264 inset frame: the base and the inset packed into one picture of the session's
-/// stream (`encode::inset_packed`), and the header that says where each lies.
+/// stream (`encode::inset_packed`), and the header that says where each lies; with `hold`
+/// (foveated encoding) the periphery of both parts is held (`encode::hold`).
 fn encode_packed(
     stream: &mut H264Stream,
     rgba: &[u8],
-    w: u32,
-    h: u32,
+    (w, h): (u32, u32),
     gaze: [f64; 2],
     viewing: &Viewing,
     inset_deg: f64,
+    hold: bool,
 ) -> Result<(encode::h264::H264Frame, Option<InsetHeader>), encode::EncodeError> {
     let held = stream.held_inset();
     let plan = inset_packed::follow(held, w, h, gaze, viewing, inset_deg, &LowPass::default());
     let (base, crop) = inset::split(rgba, w, h, &plan);
     let (picture, layout) = inset_packed::pack(&base, &crop, &plan, w, h);
+    if hold {
+        let t =
+            inset_packed::hold_thresholds(&plan, &layout, (w, h), gaze, viewing, &Hold::default());
+        stream.hold_next(t);
+    }
     let frame = stream.encode(&picture, layout.width, layout.height)?;
     stream.hold_inset(plan);
     let header = inset_header(&plan, w, h, 0, Some(layout));
