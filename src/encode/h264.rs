@@ -15,6 +15,7 @@ use openh264::encoder::{
     BitRate, Encoder, EncoderConfig, FrameRate, FrameType, Profile, QpRange, RateControlMode,
     SpsPpsStrategy, UsageType, VuiConfig,
 };
+use openh264::formats::YUVSource;
 
 use super::yuv::I420;
 
@@ -24,7 +25,6 @@ enum Picture<'a> {
     I420(&'a [u8]),
 }
 
-use openh264::formats::YUVSource;
 use openh264::{OpenH264API, Timestamp};
 
 use super::rate_guard::{RateGuard, Switch};
@@ -166,8 +166,9 @@ impl H264Stream {
         self.inset = Some(plan);
     }
 
-    /// The next frame keeps the content of each macroblock that changed by no more than its
-    /// threshold (`encode::hold::thresholds` for the picture as encoded); a keyframe takes all.
+    /// The next frame repeats what the client shows in each macroblock within its threshold
+    /// (`encode::hold`; one threshold a block of the picture as encoded). A keyframe codes
+    /// every block, and nothing is held until the stream's decoder has seen one.
     pub fn hold_next(&mut self, thresholds: Vec<u8>) {
         self.hold = Some(thresholds);
     }
@@ -342,7 +343,7 @@ impl H264Stream {
         }
         self.guard.record(bytes.len(), keyframe, since_last);
         match hold {
-            Some(_) => self.show(&bytes, keyframe)?,
+            Some(_) => self.show(&bytes, keyframe),
             None => self.shown = None,
         }
         Ok(H264Frame { bytes, keyframe })
@@ -367,22 +368,33 @@ impl H264Stream {
     }
 
     /// Decodes the frame just encoded, as the client will, for the next frame's hold. A
-    /// decoder starts at a keyframe; until one comes nothing is held.
-    fn show(&mut self, bytes: &[u8], keyframe: bool) -> Result<(), EncodeError> {
+    /// decoder starts at a keyframe; until one comes nothing is held. Never fails: the frame
+    /// is already encoded and must reach the client, so a fault here only stops the hold.
+    fn show(&mut self, bytes: &[u8], keyframe: bool) {
         if keyframe || self.shown.is_none() {
             self.shown = None;
             if !keyframe {
-                return Ok(());
+                return;
             }
-            let decoder = openh264::decoder::Decoder::with_api_config(api()?, Default::default())
-                .map_err(|e| EncodeError::H264(format!("the hold's decoder: {e}")))?;
-            self.shown = Some(Shown {
-                decoder,
-                picture: None,
+            let decoder = api().and_then(|api| {
+                openh264::decoder::Decoder::with_api_config(api, Default::default())
+                    .map_err(|e| EncodeError::H264(e.to_string()))
             });
+            match decoder {
+                Ok(decoder) => {
+                    self.shown = Some(Shown {
+                        decoder,
+                        picture: None,
+                    })
+                }
+                Err(e) => {
+                    tracing::warn!(error = %e, "no decoder for the periphery's hold; holding nothing");
+                    return;
+                }
+            }
         }
         let Some(shown) = self.shown.as_mut() else {
-            return Ok(());
+            return;
         };
         match shown.decoder.decode(bytes) {
             Ok(Some(pic)) => {
@@ -396,6 +408,5 @@ impl H264Stream {
             // Our own stream failed to decode: hold nothing until the next keyframe.
             Ok(None) | Err(_) => self.shown = None,
         }
-        Ok(())
     }
 }
