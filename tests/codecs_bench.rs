@@ -99,8 +99,23 @@ fn the_codec_sweep_measures_every_configuration_on_the_same_frames() {
             "JPEG + inset 16°",
             "H.264 + inset 16°",
             "H.264 + inset 16° + low-pass",
+            "H.264 + hold",
+            "H.264 + low-pass + hold",
+            "H.264 + inset 16° + low-pass + hold",
             "JPEG + inset 13.3°"
         ]
+    );
+    // Where the quantiser reaches its floor a held periphery is not re-coded every frame.
+    let (plain, held) = (row("H.264 8000 kbit/s"), row("H.264 8000 kbit/s + hold"));
+    assert!(
+        held.bytes.median < plain.bytes.median,
+        "{} held against {} plain",
+        held.bytes.median,
+        plain.bytes.median
+    );
+    assert_eq!(
+        held.keyframe_bytes, plain.keyframe_bytes,
+        "a keyframe holds nothing"
     );
     let jpeg = &report.equal_quality[0];
     assert!((jpeg.vs_target.unwrap() - 1.0).abs() < 1e-9);

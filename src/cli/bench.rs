@@ -27,7 +27,8 @@ pub struct BenchArgs {
     pub moving: bool,
     /// Configurations: presets, rungs, knobs, or a comma-separated list of names from knobs.
     /// `codecs` compares the encoders instead (JPEG q50–95, H.264 125–8000 kbit/s, each plain,
-    /// low-passed and with 20° and 16° insets, JPEG with a 13.3° one) on frames rendered along
+    /// low-passed and with 20° and 16° insets, JPEG with a 13.3° one, H.264 with its periphery
+    /// held alone, after the low-pass and with the 16° inset too) on frames rendered along
     /// --gaze-file (and --orbit-deg-per-s): one scene,
     /// one size, --frames frames at 60 fps; writes codecs.json, codecs.md, codecs.svg.
     #[arg(long, default_value = "knobs")]

@@ -129,7 +129,7 @@ mod tests {
                 .collect()
         };
         let inset = names("INSET 16");
-        assert_eq!(inset.len(), 19, "{inset:?}");
+        assert_eq!(inset.len(), 26, "{inset:?}");
         assert_eq!(inset[0], fovea::bench::TARGET);
         assert!(
             inset[1..].iter().all(|n| n.contains("inset 16°")),
@@ -148,6 +148,9 @@ mod tests {
                 "JPEG q95 + inset 16°",
                 "H.264 500 kbit/s + inset 16°",
                 "H.264 500 kbit/s + inset 16° + low-pass",
+                "H.264 500 kbit/s + hold",
+                "H.264 500 kbit/s + low-pass + hold",
+                "H.264 500 kbit/s + inset 16° + low-pass + hold",
                 "JPEG q95 + inset 13.3°"
             ]
         );

@@ -122,24 +122,16 @@ pub async fn make(render: RenderHandle, job: FrameJob) -> Result<MadeFrame, Fram
             None => rgba,
         };
         let out = match (codec, stream, inset) {
-            (Codec::H264, Some(stream), inset) => stream
-                .lock()
-                .map_err(|_| encode::EncodeError::H264("the stream's lock was poisoned".into()))
-                .and_then(|mut s| match (&i420, inset) {
-                    (_, Some((deg, viewing))) => {
-                        encode_packed(&mut s, &rgba, (w, h), g, &viewing, deg, hold.is_some())
-                    }
-                    // Converted (and low-passed, if asked) on the GPU.
-                    (Some(planes), None) => {
-                        hold_periphery(&mut s, hold.as_ref(), w, h, g);
-                        s.encode_i420(planes, w, h).map(|f| (f, None))
-                    }
-                    (None, None) => {
-                        hold_periphery(&mut s, hold.as_ref(), w, h, g);
-                        s.encode(&rgba, w, h).map(|f| (f, None))
-                    }
-                })
-                .map(|(f, i)| (f.bytes, Some(f.keyframe), i)),
+            (Codec::H264, Some(stream), inset) => {
+                let p = Picture {
+                    rgba: &rgba,
+                    i420: i420.as_deref(),
+                    w,
+                    h,
+                };
+                encode_h264(&stream, p, g, inset.as_ref(), hold.as_ref())
+                    .map(|(f, i)| (f.bytes, Some(f.keyframe), i))
+            }
             (_, _, Some((deg, viewing))) => {
                 encode_inset(&rgba, w, h, g, &viewing, deg, codec, quality)
                     .map(|(b, i)| (b, None, Some(i)))
@@ -213,10 +205,39 @@ fn encode_inset(
     Ok((bytes, header))
 }
 
-/// Holds the next frame's periphery where foveated encoding is on (`encode::hold`).
-fn hold_periphery(stream: &mut H264Stream, viewing: Option<&Viewing>, w: u32, h: u32, g: [f64; 2]) {
-    if let Some(viewing) = viewing {
-        stream.hold_next(hold::thresholds(w, h, g, viewing, &Hold::default()));
+/// A read-back frame: RGBA, and its I420 planes where the GPU converted it.
+struct Picture<'a> {
+    rgba: &'a [u8],
+    i420: Option<&'a [u8]>,
+    w: u32,
+    h: u32,
+}
+
+/// Encodes a frame with the session's H.264 stream: packed with its inset for an inset
+/// session, else whole (from the GPU's I420 planes where there are some). With `hold` (the
+/// viewing geometry of foveated encoding) the periphery is held (`encode::hold`).
+fn encode_h264(
+    stream: &Mutex<H264Stream>,
+    p: Picture,
+    g: [f64; 2],
+    inset: Option<&(f64, Viewing)>,
+    hold: Option<&Viewing>,
+) -> Result<(encode::h264::H264Frame, Option<InsetHeader>), encode::EncodeError> {
+    let mut s = stream
+        .lock()
+        .map_err(|_| encode::EncodeError::H264("the stream's lock was poisoned".into()))?;
+    let s = &mut *s;
+    let (w, h) = (p.w, p.h);
+    if let Some((deg, viewing)) = inset {
+        return encode_packed(s, p.rgba, (w, h), g, viewing, *deg, hold.is_some());
+    }
+    if let Some(viewing) = hold {
+        s.hold_next(hold::thresholds(w, h, g, viewing, &Hold::default()));
+    }
+    match p.i420 {
+        // Converted (and low-passed, if asked) on the GPU.
+        Some(planes) => s.encode_i420(planes, w, h).map(|f| (f, None)),
+        None => s.encode(p.rgba, w, h).map(|f| (f, None)),
     }
 }
 
