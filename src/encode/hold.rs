@@ -19,7 +19,7 @@
 //! t/2 in each of Y, U and V and no sample differs by more than [`PEAK`]·t, so what the client
 //! shows of it never strays further from the frame. Blocks near the limit are refined by the
 //! encoder until they come within it, then held; a keyframe codes every block. The cost is a
-//! decode of each frame (`h264::H264Stream`), 2–3 ms at 720p here.
+//! decode of each frame (`h264::H264Stream`), about 3 ms at 720p here.
 
 use super::foveated::LowPass;
 use super::yuv::I420;
@@ -107,10 +107,10 @@ pub fn blocks(width: usize, height: usize) -> (usize, usize) {
 }
 
 /// Puts back into `picture` (the frame about to be encoded) the previous frame's decoded
-/// content `shown` in each block whose threshold is not 0 and where no Y, U or V sample of
-/// `picture` differs from `shown` by more than it: the encoder then finds nothing to code
-/// there and skips the block. Returns how many blocks were held. Pictures of two sizes or a
-/// map of the wrong length hold nothing.
+/// content `shown` in each block whose threshold is not 0 and whose Y, U and V lie within it
+/// of `shown` (mean and [`PEAK`], see the module): the encoder then finds nothing to code
+/// there and skips the block; `ALWAYS` holds a block whatever it holds. Returns how many
+/// blocks were held. Pictures of two sizes or a map of the wrong length hold nothing.
 pub fn merge(picture: &mut I420, shown: &I420, thresholds: &[u8]) -> usize {
     let (w, h) = picture.size();
     let (cols, rows) = blocks(w, h);
