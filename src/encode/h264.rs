@@ -354,7 +354,7 @@ impl H264Stream {
     fn take_picture(&mut self, picture: Picture, w: usize, h: usize, hold: Option<&[u8]>) {
         // One YUV buffer per stream, refilled each frame (1.4 MB at 720p not reallocated).
         let yuv = match &mut self.yuv {
-            Some(buffer) if buffer.size() == (w, h) => buffer,
+            Some(buffer) if buffer.dimensions() == (w, h) => buffer,
             slot => slot.insert(I420::new(w, h)),
         };
         match picture {
@@ -400,7 +400,7 @@ impl H264Stream {
             Ok(Some(pic)) => {
                 let slot = &mut shown.picture;
                 let buffer = match slot {
-                    Some(b) if b.size() == pic.dimensions() => b,
+                    Some(b) if b.dimensions() == pic.dimensions() => b,
                     _ => slot.insert(I420::new(pic.dimensions().0, pic.dimensions().1)),
                 };
                 buffer.copy_from_source(&pic);

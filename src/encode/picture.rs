@@ -26,24 +26,6 @@ impl I420 {
         self.data.copy_from_slice(planes);
     }
 
-    /// Width and height in luma samples.
-    pub fn size(&self) -> (usize, usize) {
-        (self.width, self.height)
-    }
-
-    /// Y, U and V, tight, one after the other.
-    pub fn data(&self) -> &[u8] {
-        &self.data
-    }
-
-    /// The Y, U and V planes.
-    pub fn planes(&self) -> (&[u8], &[u8], &[u8]) {
-        let n = self.width * self.height;
-        let (y, chroma) = self.data.split_at(n);
-        let (u, v) = chroma.split_at(n / 4);
-        (y, u, v)
-    }
-
     /// The Y, U and V planes, to write.
     pub fn planes_mut(&mut self) -> (&mut [u8], &mut [u8], &mut [u8]) {
         let n = self.width * self.height;

@@ -159,17 +159,10 @@ pub fn picture_to_rgba_filtered(pic: &impl openh264::formats::YUVSource) -> Vec<
 /// A picture's planes, tightly packed.
 fn planes(pic: &impl openh264::formats::YUVSource) -> (Vec<u8>, Vec<u8>, Vec<u8>) {
     let (w, h) = pic.dimensions();
-    let (ys, us, vs) = pic.strides();
-    let rows = |plane: &[u8], stride: usize, width: usize, height: usize| -> Vec<u8> {
-        (0..height)
-            .flat_map(|j| plane[j * stride..j * stride + width].iter().copied())
-            .collect()
-    };
-    (
-        rows(pic.y(), ys, w, h),
-        rows(pic.u(), us, w / 2, h / 2),
-        rows(pic.v(), vs, w / 2, h / 2),
-    )
+    let mut tight = I420::new(w, h);
+    tight.copy_from_source(pic);
+    use openh264::formats::YUVSource;
+    (tight.y().to_vec(), tight.u().to_vec(), tight.v().to_vec())
 }
 
 /// The inverse, for tests and measurements (what a BT.601 full-range decoder shows), each
