@@ -158,10 +158,10 @@ pub fn picture_to_rgba_filtered(pic: &impl openh264::formats::YUVSource) -> Vec<
 
 /// A picture's planes, tightly packed.
 fn planes(pic: &impl openh264::formats::YUVSource) -> (Vec<u8>, Vec<u8>, Vec<u8>) {
+    use openh264::formats::YUVSource;
     let (w, h) = pic.dimensions();
     let mut tight = I420::new(w, h);
     tight.copy_from_source(pic);
-    use openh264::formats::YUVSource;
     (tight.y().to_vec(), tight.u().to_vec(), tight.v().to_vec())
 }
 
