@@ -104,9 +104,12 @@ async fn a_recorded_session_replays_to_the_same_frames() {
         speed: 0.5,
         ..options(&url)
     };
+    // A first session builds the pipelines; on a busy machine the replay's first frame had
+    // otherwise waited out the whole replay, leaving it one frame.
+    first_frame(&url, &slow.hello).await;
     let (first, _) = replay(&synthetic, &slow, |_, _| {}).await.unwrap();
     // The session ended with the replay; its recording lands once the server notices.
-    let path = common::run_folder(&dir).join("session-1.csv");
+    let path = common::run_folder(&dir).join("session-2.csv");
     for _ in 0..50 {
         if path.exists() {
             break;
@@ -165,11 +168,14 @@ async fn a_replay_follows_a_goodbye_to_the_next_instance() {
         ..Default::default()
     };
     let (addr, first) = common::start(drainable()).await;
-    let eye = fovea::gaze::synthetic::generate(9, &small_screen(), 250.0, 6000.0);
+    let eye = fovea::gaze::synthetic::generate(9, &small_screen(), 250.0, 8000.0);
     let url = format!("ws://{addr}/ws");
     let opts = options(&url);
+    // One frame first, so the replay's first frames do not wait on pipeline builds: on a cold
+    // machine they once took longer than the replay had before the goodbye.
+    first_frame(&url, &opts.hello).await;
     let run = tokio::spawn(async move { replay(&eye, &opts, |_, _| {}).await });
-    tokio::time::sleep(Duration::from_millis(1500)).await;
+    tokio::time::sleep(Duration::from_millis(2500)).await;
     // SIGTERM's path: the replay is told goodbye, leaves, and the instance exits.
     let began = std::time::Instant::now();
     first.stop().await;
@@ -194,6 +200,19 @@ async fn a_replay_follows_a_goodbye_to_the_next_instance() {
         "{summary:?}"
     );
     second.stop().await;
+}
+
+/// Opens a session, waits for its first frame and leaves.
+async fn first_frame(url: &str, hello: &Hello) {
+    let mut c = fovea::client::Client::connect(url).await.unwrap();
+    c.hello(hello).await.unwrap();
+    send_still_gaze(&mut c, 1, None).await;
+    loop {
+        let event = c.next_event(Duration::from_secs(60)).await.unwrap();
+        if let fovea::client::Event::Frame { .. } = event {
+            return;
+        }
+    }
 }
 
 /// A live session's rows reach its file within a second even when samples stop coming.
