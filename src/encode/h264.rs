@@ -17,6 +17,7 @@ use openh264::encoder::{
 };
 use openh264::formats::YUVSource;
 
+use super::shown::Shown;
 use super::yuv::I420;
 
 /// A frame as the renderer hands it over.
@@ -58,7 +59,7 @@ impl Default for H264Config {
 
 /// The openh264 to use: Cisco's binary named by `FOVEA_OPENH264_LIB` when built with the
 /// `openh264-libloading` feature, else the one built from source.
-fn api() -> Result<OpenH264API, EncodeError> {
+pub(super) fn api() -> Result<OpenH264API, EncodeError> {
     #[cfg(feature = "openh264-libloading")]
     if let Some(path) = std::env::var_os("FOVEA_OPENH264_LIB") {
         // SAFETY: the library is Cisco's openh264 build, named by whoever runs the server;
@@ -113,12 +114,6 @@ pub struct H264Stream {
     /// (`encode::hold`), and the stream decoded as a client shows it, which held blocks repeat.
     hold: Option<Vec<u8>>,
     shown: Option<Shown>,
-}
-
-/// The stream as its decoder shows it: the previous frame's picture, tight I420.
-struct Shown {
-    decoder: openh264::decoder::Decoder,
-    picture: Option<I420>,
 }
 
 /// One encoded frame: Annex B NAL units.
@@ -342,9 +337,20 @@ impl H264Stream {
             self.keyframe_asked = false;
         }
         self.guard.record(bytes.len(), keyframe, since_last);
-        match hold {
-            Some(_) => self.show(&bytes, keyframe),
-            None => self.shown = None,
+        // Decoded for the next frame's hold while the next frame renders (`encode::shown`); a
+        // decoder starts at a keyframe, so until one comes nothing is held.
+        if hold.is_none() || keyframe {
+            self.shown = None;
+        }
+        if hold.is_some() {
+            let shown = match &mut self.shown {
+                Some(s) => Some(s),
+                slot if keyframe => Some(slot.insert(Shown::start())),
+                _ => None,
+            };
+            if let Some(s) = shown {
+                s.submit(bytes.clone());
+            }
         }
         Ok(H264Frame { bytes, keyframe })
     }
@@ -361,52 +367,12 @@ impl H264Stream {
             Picture::Rgba(rgba) => yuv.fill(rgba),
             Picture::I420(planes) => yuv.copy_from(planes),
         }
-        let shown = self.shown.as_ref().and_then(|s| s.picture.as_ref());
+        let shown = match hold {
+            Some(_) => self.shown.as_mut().and_then(|s| s.picture()),
+            None => None,
+        };
         if let (Some(t), Some(shown)) = (hold, shown) {
             super::hold::merge(yuv, shown, t);
-        }
-    }
-
-    /// Decodes the frame just encoded, as the client will, for the next frame's hold. A
-    /// decoder starts at a keyframe; until one comes nothing is held. Never fails: the frame
-    /// is already encoded and must reach the client, so a fault here only stops the hold.
-    fn show(&mut self, bytes: &[u8], keyframe: bool) {
-        if keyframe || self.shown.is_none() {
-            self.shown = None;
-            if !keyframe {
-                return;
-            }
-            let decoder = api().and_then(|api| {
-                openh264::decoder::Decoder::with_api_config(api, Default::default())
-                    .map_err(|e| EncodeError::H264(e.to_string()))
-            });
-            match decoder {
-                Ok(decoder) => {
-                    self.shown = Some(Shown {
-                        decoder,
-                        picture: None,
-                    })
-                }
-                Err(e) => {
-                    tracing::warn!(error = %e, "no decoder for the periphery's hold; holding nothing");
-                    return;
-                }
-            }
-        }
-        let Some(shown) = self.shown.as_mut() else {
-            return;
-        };
-        match shown.decoder.decode(bytes) {
-            Ok(Some(pic)) => {
-                let slot = &mut shown.picture;
-                let buffer = match slot {
-                    Some(b) if b.dimensions() == pic.dimensions() => b,
-                    _ => slot.insert(I420::new(pic.dimensions().0, pic.dimensions().1)),
-                };
-                buffer.copy_from_source(&pic);
-            }
-            // Our own stream failed to decode: hold nothing until the next keyframe.
-            Ok(None) | Err(_) => self.shown = None,
         }
     }
 }

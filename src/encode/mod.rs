@@ -8,6 +8,7 @@ pub mod inset;
 pub mod inset_packed;
 pub mod picture;
 pub mod rate_guard;
+pub mod shown;
 pub mod yuv;
 
 use crate::protocol::Codec;
