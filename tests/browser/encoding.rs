@@ -1,5 +1,6 @@
 //! Foveated encoding in the page: an inset frame (a downscaled whole frame plus a
-//! full-resolution square on the gaze) is composed on the canvas where the gaze was.
+//! full-resolution square on the gaze) is composed on the canvas where the gaze was, and a
+//! low-passed, held H.264 stream decodes.
 
 use serde_json::Value;
 
@@ -164,6 +165,55 @@ async fn an_h264_inset_frame_is_one_picture_composed_where_the_gaze_was() {
     );
     assert!(eval(&page, "window.fovea.errors.length").await == 0);
     screenshot(&page, "h264-inset").await;
+    drop(page);
+    f.finish();
+}
+
+/// H.264 with foveated encoding (the periphery low-passed, and held where it changed by less
+/// than the eye can tell, the server decoding its own stream on a thread of its own): every
+/// frame decodes in the page, P-frames follow the gaze, and the canvas shows the scene.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn a_foveated_h264_stream_decodes_in_the_page() {
+    let f = Fixture::start(&[]).await;
+    let page = f.page().await;
+    eval(&page, "(() => { for (const [id, v] of [['codec', 'h264'], ['encoding', 'lowpass']]) { const s = document.getElementById(id); s.value = v; s.dispatchEvent(new Event('change')); } return true; })()").await;
+    wait_for(
+        &page,
+        "window.fovea.lastHeader && window.fovea.lastHeader.codec === 'h264' && window.fovea.player && window.fovea.player.decoded >= 1",
+        30,
+    )
+    .await;
+    assert_eq!(eval(&page, "window.fovea.codecNote").await, Value::Null);
+    // Small moves (most blocks held) and a jump (the periphery taken again).
+    for (x, y) in [
+        (0.4, 0.5),
+        (0.41, 0.5),
+        (0.42, 0.51),
+        (0.7, 0.3),
+        (0.71, 0.3),
+    ] {
+        let shown = eval(&page, "window.fovea.framesShown")
+            .await
+            .as_u64()
+            .unwrap();
+        gaze_at(&page, x, y).await;
+        wait_for(&page, &format!("window.fovea.framesShown > {shown}"), 20).await;
+    }
+    let mix = eval(
+        &page,
+        "[window.fovea.player.decoded, window.fovea.player.keyframes, window.fovea.player.errors]",
+    )
+    .await;
+    let (decoded, keys) = (mix[0].as_u64().unwrap(), mix[1].as_u64().unwrap());
+    assert!(keys >= 1 && decoded > keys + 3, "P-frames decoded: {mix}");
+    assert_eq!(mix[2], Value::from(0), "no decoder error: {mix}");
+    let colours: u64 = serde_json::from_value(eval(&page, COLOURS).await).unwrap();
+    assert!(
+        colours > 50,
+        "the decoded frame shows the scene ({colours} colours)"
+    );
+    assert!(eval(&page, "window.fovea.errors.length").await == 0);
+    screenshot(&page, "h264-lowpass").await;
     drop(page);
     f.finish();
 }
