@@ -4,7 +4,7 @@
 
 use serde_json::Value;
 
-use crate::harness::{eval, gaze_at, screenshot, wait_for, Fixture, COLOURS};
+use crate::harness::{change, eval, gaze_and_frame, screenshot, wait_for, Fixture, COLOURS};
 
 /// The mean absolute difference between the canvas and the inset image drawn alone, over the
 /// inset's unfeathered core (0 when the page put the inset where the header says). The inset
@@ -55,7 +55,7 @@ fn centre_and_gaze(h: &Value) -> ([f64; 2], [f64; 2]) {
 async fn an_inset_frame_is_composed_where_the_gaze_was() {
     let f = Fixture::start(&[]).await;
     let page = f.page().await;
-    eval(&page, "(() => { const s = document.getElementById('encoding'); s.value = 'inset'; s.dispatchEvent(new Event('change')); return true; })()").await;
+    eval(&page, &change("encoding", "e.value = 'inset'")).await;
     wait_for(
         &page,
         "window.fovea.lastHeader && window.fovea.lastHeader.inset != null",
@@ -63,12 +63,7 @@ async fn an_inset_frame_is_composed_where_the_gaze_was() {
     )
     .await;
     for (x, y) in [(0.35, 0.45), (0.6, 0.55)] {
-        let shown = eval(&page, "window.fovea.framesShown")
-            .await
-            .as_u64()
-            .unwrap();
-        gaze_at(&page, x, y).await;
-        wait_for(&page, &format!("window.fovea.framesShown > {shown}"), 20).await;
+        gaze_and_frame(&page, x, y).await;
     }
     let h = eval(&page, "window.fovea.lastHeader").await;
     let i = &h["inset"];
@@ -115,7 +110,13 @@ const EDGE_STEP: &str = r#"(() => {
 async fn an_h264_inset_frame_is_one_picture_composed_where_the_gaze_was() {
     let f = Fixture::start(&[]).await;
     let page = f.page().await;
-    eval(&page, "(() => { window.fovea.keepPictures = true; for (const [id, v] of [['codec', 'h264'], ['encoding', 'inset']]) { const s = document.getElementById(id); s.value = v; s.dispatchEvent(new Event('change')); } return true; })()").await;
+    eval(
+        &page,
+        "(() => { window.fovea.keepPictures = true; return true; })()",
+    )
+    .await;
+    eval(&page, &change("codec", "e.value = 'h264'")).await;
+    eval(&page, &change("encoding", "e.value = 'inset'")).await;
     wait_for(
         &page,
         "window.fovea.lastHeader && window.fovea.lastHeader.codec === 'h264' && window.fovea.lastHeader.inset != null && window.fovea.lastImage != null",
@@ -125,12 +126,7 @@ async fn an_h264_inset_frame_is_one_picture_composed_where_the_gaze_was() {
     assert_eq!(eval(&page, "window.fovea.codecNote").await, Value::Null);
     let mut places = Vec::new();
     for (x, y) in [(0.35, 0.45), (0.6, 0.55)] {
-        let shown = eval(&page, "window.fovea.framesShown")
-            .await
-            .as_u64()
-            .unwrap();
-        gaze_at(&page, x, y).await;
-        wait_for(&page, &format!("window.fovea.framesShown > {shown}"), 20).await;
+        gaze_and_frame(&page, x, y).await;
         let h = eval(&page, "window.fovea.lastHeader").await;
         let i = &h["inset"];
         let (centre, gaze) = centre_and_gaze(&h);
@@ -176,7 +172,8 @@ async fn an_h264_inset_frame_is_one_picture_composed_where_the_gaze_was() {
 async fn a_foveated_h264_stream_decodes_in_the_page() {
     let f = Fixture::start(&[]).await;
     let page = f.page().await;
-    eval(&page, "(() => { for (const [id, v] of [['codec', 'h264'], ['encoding', 'lowpass']]) { const s = document.getElementById(id); s.value = v; s.dispatchEvent(new Event('change')); } return true; })()").await;
+    eval(&page, &change("codec", "e.value = 'h264'")).await;
+    eval(&page, &change("encoding", "e.value = 'lowpass'")).await;
     wait_for(
         &page,
         "window.fovea.lastHeader && window.fovea.lastHeader.codec === 'h264' && window.fovea.player && window.fovea.player.decoded >= 1",
@@ -192,12 +189,7 @@ async fn a_foveated_h264_stream_decodes_in_the_page() {
         (0.7, 0.3),
         (0.71, 0.3),
     ] {
-        let shown = eval(&page, "window.fovea.framesShown")
-            .await
-            .as_u64()
-            .unwrap();
-        gaze_at(&page, x, y).await;
-        wait_for(&page, &format!("window.fovea.framesShown > {shown}"), 20).await;
+        gaze_and_frame(&page, x, y).await;
     }
     let mix = eval(
         &page,

@@ -209,6 +209,14 @@ pub async fn gaze_at(page: &Page, fx: f64, fy: f64) {
     wait_for(page, &js, 30).await;
 }
 
+/// Moves the gaze to (fx, fy) and waits until a frame answering it is drawn on the canvas.
+pub async fn gaze_and_frame(page: &Page, fx: f64, fy: f64) {
+    let shown = eval(page, "window.fovea.framesShown").await.as_u64();
+    let shown = shown.expect("a frame count");
+    gaze_at(page, fx, fy).await;
+    wait_for(page, &format!("window.fovea.framesShown > {shown}"), 20).await;
+}
+
 pub async fn press(page: &Page, key: &str) {
     page.find_element("body")
         .await
