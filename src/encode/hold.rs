@@ -128,16 +128,16 @@ pub fn merge(picture: &mut I420, shown: &I420, thresholds: &[u8]) -> usize {
     let mut held = 0;
     for by in 0..rows {
         let ts = &thresholds[by * cols..(by + 1) * cols];
+        let (luma, chroma) = (band(by, MB, h), band(by, MB / 2, ch));
         tallies.fill([Tally::default(); 3]);
         if ts.iter().any(|&t| t != 0 && t != ALWAYS) {
-            let (luma, chroma) = (band(by, MB, h), band(by, MB / 2, ch));
-            tally::<MB>(py, sy, w, luma, &mut tallies, 0);
+            tally::<MB>(py, sy, w, luma.clone(), &mut tallies, 0);
             tally::<{ MB / 2 }>(pu, su, cw, chroma.clone(), &mut tallies, 1);
-            tally::<{ MB / 2 }>(pv, sv, cw, chroma, &mut tallies, 2);
+            tally::<{ MB / 2 }>(pv, sv, cw, chroma.clone(), &mut tallies, 2);
         }
         for (bx, (t, counts)) in ts.iter().zip(&tallies).enumerate() {
-            let luma_n = side_in(bx, MB, w) * band(by, MB, h).len();
-            let chroma_n = side_in(bx, MB / 2, cw) * band(by, MB / 2, ch).len();
+            let luma_n = side_in(bx, MB, w) * luma.len();
+            let chroma_n = side_in(bx, MB / 2, cw) * chroma.len();
             let n = [luma_n, chroma_n, chroma_n];
             hold[bx] = match *t {
                 0 => false,
@@ -146,9 +146,9 @@ pub fn merge(picture: &mut I420, shown: &I420, thresholds: &[u8]) -> usize {
             };
         }
         held += hold.iter().filter(|&&b| b).count();
-        copy_held::<MB>(sy, py, w, band(by, MB, h), &hold);
-        copy_held::<{ MB / 2 }>(su, pu, cw, band(by, MB / 2, ch), &hold);
-        copy_held::<{ MB / 2 }>(sv, pv, cw, band(by, MB / 2, ch), &hold);
+        copy_held::<MB>(sy, py, w, luma, &hold);
+        copy_held::<{ MB / 2 }>(su, pu, cw, chroma.clone(), &hold);
+        copy_held::<{ MB / 2 }>(sv, pv, cw, chroma, &hold);
     }
     held
 }
@@ -166,6 +166,11 @@ impl Tally {
     fn within(&self, t: u8, n: usize) -> bool {
         2 * u64::from(self.sum) <= u64::from(t) * n as u64
             && u32::from(self.peak) <= PEAK * u32::from(t)
+    }
+
+    fn add(&mut self, sum: u32, peak: u8) {
+        self.sum += sum;
+        self.peak = self.peak.max(peak);
     }
 }
 
@@ -199,14 +204,9 @@ fn tally<const S: usize>(
         for (o, chunk) in out.iter_mut().zip(diff.chunks(S)) {
             let sum: u32 = chunk.iter().map(|&v| u32::from(v)).sum();
             let peak = chunk.iter().copied().fold(0, u8::max);
-            add(&mut o[plane], sum, peak);
+            o[plane].add(sum, peak);
         }
     }
-}
-
-fn add(t: &mut Tally, sum: u32, peak: u8) {
-    t.sum += sum;
-    t.peak = t.peak.max(peak);
 }
 
 /// Copies the held blocks' samples of `rows` from `from` into `to` (planes `stride` wide,
