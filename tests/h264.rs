@@ -1,6 +1,7 @@
 //! H.264 frames: a rendered frame survives encode → decode (openh264's own decoder), keyframes
 //! come when asked and when due, and a session streams them with the header saying which are
-//! keyframes; bad requests get errors and the server lives.
+//! keyframes; bad requests get errors and the server lives; a target that pays for it
+//! refines a still picture further.
 
 use std::time::Duration;
 
@@ -320,4 +321,44 @@ fn a_held_periphery_stops_recoding_a_still_picture() {
         last[0],
         last[1]
     );
+}
+
+#[test]
+fn a_target_that_pays_for_it_encodes_a_still_picture_finer() {
+    // At 0.1 bits per pixel of a 60 fps frame the quality range narrows to QP 10
+    // (`rate_guard::FINE_BITS_PER_PIXEL`): 460.8 kbit/s at 320×240.
+    let mut renderer = Renderer::new().unwrap_or_else(|e| panic!("GPU tests need an adapter: {e}"));
+    let (w, h) = (320, 240);
+    let rgba = renderer
+        .render(&FrameRequest::new("bunny-marble", w, h))
+        .unwrap()
+        .rgba;
+    let mut runs = Vec::new();
+    for kbps in [460, 461] {
+        let mut stream = H264Stream::new(H264Config {
+            kbps,
+            keyframe_every: Duration::from_secs(3600),
+        });
+        let mut decoder = Decoder::new().unwrap();
+        let (mut key, mut db) = (0, Vec::new());
+        for k in 0..12u64 {
+            let f = stream.encode_at(&rgba, w, h, k * 16).unwrap();
+            if k == 0 {
+                key = f.bytes.len();
+            }
+            db.push(psnr(&rgba, &decode(&mut decoder, &f.bytes)));
+        }
+        eprintln!("{kbps} kbit/s: keyframe {key} bytes, {db:.2?} dB");
+        runs.push((key, db));
+    }
+    let (coarse, fine) = (&runs[0], &runs[1]);
+    assert!(
+        fine.0 > coarse.0,
+        "keyframes {} and {} bytes",
+        coarse.0,
+        fine.0
+    );
+    for (k, (c, f)) in coarse.1.iter().zip(&fine.1).enumerate() {
+        assert!(f > c, "frame {k}: {c:.2} dB coarse, {f:.2} fine");
+    }
 }

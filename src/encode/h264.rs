@@ -205,10 +205,11 @@ impl H264Stream {
                 // Below QP 18 openh264 never settles on a still picture: every P-frame re-codes
                 // it (460 bytes a frame on `bunny-marble`, 2438 on `gallery` at 720p, 13–17
                 // from QP 18 up), which is what `encode::hold` stops where the eye cannot
-                // tell; the floor stays at 10, whose refinement the fovea needs.
+                // tell; the floor stays at 10, whose refinement the fovea needs (where the
+                // target pays for it the whole quality range: `rate_guard::FINE_BITS_PER_PIXEL`).
                 .qp(QpRange::new(
                     super::rate_guard::QpCap::MIN_QP,
-                    self.guard.cap().max_qp(),
+                    self.guard.cap().max_qp(self.config.kbps, width, height),
                 ))
                 .background_detection(false)
                 // Its scene-change detection sent a keyframe every 17 frames of a moving test

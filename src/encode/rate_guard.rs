@@ -27,26 +27,54 @@
 //!
 //! `OVER`, `CALM` and `WINDOW` were set from those runs at 640×480 along the 1000 Hz recording;
 //! docs/encoding.md reports 1280×720 along the 500 Hz one.
+//!
+//! Where the target pays for it (`FINE_BITS_PER_PIXEL`) the quality range is QP 10 alone:
+//! a still picture's last refinement, which the fovea's FLIP needs, for a larger keyframe.
 
 use std::collections::VecDeque;
 
 /// The quantiser range (H.264: 0 finest … 51 coarsest).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum QpCap {
-    /// QP 10–22: a still picture refines, the target may be overrun.
+    /// QP 10–22, or 10 alone where the target pays for it (`FINE_BITS_PER_PIXEL`): a still
+    /// picture refines, the target may be overrun.
     Quality,
     /// QP 10–51: the target holds, a still picture stays near its keyframe's quality.
     Target,
 }
 
+/// From this many bits per pixel of a 60 fps frame (1280×720 at 5530 kbit/s, 640×480 at
+/// 1843) the quality range is QP 10 alone. A still picture keeps its keyframe's quality, and
+/// with the range's top at 22 a still `bunny-marble` stopped at foveal FLIP 0.0204 however
+/// much the target allowed (0.0203 at 16, 0.0199 at 10, 1280×720 at 8000 kbit/s; the
+/// stream's rate fell, 814 → 715 kbit/s, as its P-frames had less to refine). The price is
+/// the keyframe (11 → 19 kB there; 65 → 141 kB on `gallery`) and, before the guard frees the
+/// quantiser, a moving picture's first frames (docs/encoding.md has both). Set between the
+/// default target at 720p (0.072) and 8000 kbit/s there (0.145), on `bunny-marble` only.
+pub const FINE_BITS_PER_PIXEL: f64 = 0.1;
+
 impl QpCap {
     pub const MIN_QP: u8 = 10;
 
-    pub fn max_qp(self) -> u8 {
+    /// The range's top for a target of `kbps` at `width`×`height`.
+    pub fn max_qp(self, kbps: u32, width: u32, height: u32) -> u8 {
         match self {
+            QpCap::Quality if bits_per_pixel(kbps, width, height) >= FINE_BITS_PER_PIXEL => {
+                Self::MIN_QP
+            }
             QpCap::Quality => 22,
             QpCap::Target => 51,
         }
+    }
+}
+
+/// A target's bits per pixel of a frame at 60 fps (0 for an empty picture).
+pub fn bits_per_pixel(kbps: u32, width: u32, height: u32) -> f64 {
+    let pixels = f64::from(width) * f64::from(height);
+    if pixels > 0.0 {
+        f64::from(kbps) * 1000.0 / (pixels * 60.0)
+    } else {
+        0.0
     }
 }
 
@@ -185,6 +213,22 @@ mod tests {
         for _ in 0..n {
             g.record(bytes, false, 8);
         }
+    }
+
+    #[test]
+    fn a_target_that_pays_for_it_fixes_the_quality_range_at_the_floor() {
+        // 1280×720: the default target keeps the top at 22, 8000 kbit/s fixes QP 10.
+        assert_eq!(QpCap::Quality.max_qp(4000, 1280, 720), 22);
+        assert_eq!(QpCap::Quality.max_qp(8000, 1280, 720), QpCap::MIN_QP);
+        // The same target over fewer pixels pays for more.
+        assert_eq!(QpCap::Quality.max_qp(4000, 640, 480), QpCap::MIN_QP);
+        assert_eq!(QpCap::Quality.max_qp(1000, 640, 480), 22);
+        // Just under and at the threshold (1843.2 kbit/s at 640×480).
+        assert_eq!(QpCap::Quality.max_qp(1843, 640, 480), 22);
+        assert_eq!(QpCap::Quality.max_qp(1844, 640, 480), QpCap::MIN_QP);
+        // The target range never narrows; no picture is no budget.
+        assert_eq!(QpCap::Target.max_qp(50_000, 16, 16), 51);
+        assert_eq!(QpCap::Quality.max_qp(50_000, 0, 720), 22);
     }
 
     #[test]
