@@ -278,16 +278,21 @@ fn a_moving_picture_frees_the_quantiser_to_hold_the_bitrate() {
     assert!(moving.iter().all(|f| f.2 > 20.0), "{moving:?}");
 }
 
+/// One frame of `scene` rendered with the gaze at the centre.
+fn still(scene: &str, w: u32, h: u32) -> Vec<u8> {
+    let mut renderer = Renderer::new().unwrap_or_else(|e| panic!("GPU tests need an adapter: {e}"));
+    renderer
+        .render(&FrameRequest::new(scene, w, h))
+        .unwrap()
+        .rgba
+}
+
 #[test]
 fn a_held_periphery_stops_recoding_a_still_picture() {
     // openh264 below QP 18 re-codes a still picture in every P-frame (src/encode/h264.rs);
     // with the periphery held, only the blocks near the gaze are re-coded.
-    let mut renderer = Renderer::new().unwrap_or_else(|e| panic!("GPU tests need an adapter: {e}"));
     let (w, h) = (640, 360);
-    let rgba = renderer
-        .render(&FrameRequest::new("gallery", w, h))
-        .unwrap()
-        .rgba;
+    let rgba = still("gallery", w, h);
     let viewing = fovea::viewing::Viewing::new(Default::default(), w, h);
     let hold = fovea::encode::hold::Hold::default();
     let config = H264Config {
@@ -327,12 +332,8 @@ fn a_held_periphery_stops_recoding_a_still_picture() {
 fn a_target_that_pays_for_it_encodes_a_still_picture_finer() {
     // At 0.1 bits per pixel of a 60 fps frame the quality range narrows to QP 10
     // (`rate_guard::FINE_BITS_PER_PIXEL`): 460.8 kbit/s at 320×240.
-    let mut renderer = Renderer::new().unwrap_or_else(|e| panic!("GPU tests need an adapter: {e}"));
     let (w, h) = (320, 240);
-    let rgba = renderer
-        .render(&FrameRequest::new("bunny-marble", w, h))
-        .unwrap()
-        .rgba;
+    let rgba = still("bunny-marble", w, h);
     let mut runs = Vec::new();
     for kbps in [460, 461] {
         let mut stream = H264Stream::new(H264Config {
