@@ -4,7 +4,9 @@
 
 use serde_json::Value;
 
-use crate::harness::{change, eval, gaze_and_frame, screenshot, wait_for, Fixture, COLOURS};
+use crate::harness::{
+    change, choose_h264, eval, gaze_and_frame, screenshot, wait_for, Fixture, COLOURS,
+};
 
 /// The mean absolute difference between the canvas and the inset image drawn alone, over the
 /// inset's unfeathered core (0 when the page put the inset where the header says). The inset
@@ -115,15 +117,12 @@ async fn an_h264_inset_frame_is_one_picture_composed_where_the_gaze_was() {
         "(() => { window.fovea.keepPictures = true; return true; })()",
     )
     .await;
-    eval(&page, &change("codec", "e.value = 'h264'")).await;
-    eval(&page, &change("encoding", "e.value = 'inset'")).await;
-    wait_for(
+    choose_h264(
         &page,
-        "window.fovea.lastHeader && window.fovea.lastHeader.codec === 'h264' && window.fovea.lastHeader.inset != null && window.fovea.lastImage != null",
-        30,
+        Some("inset"),
+        "window.fovea.lastHeader.inset != null && window.fovea.lastImage != null",
     )
     .await;
-    assert_eq!(eval(&page, "window.fovea.codecNote").await, Value::Null);
     let mut places = Vec::new();
     for (x, y) in [(0.35, 0.45), (0.6, 0.55)] {
         gaze_and_frame(&page, x, y).await;
@@ -172,15 +171,12 @@ async fn an_h264_inset_frame_is_one_picture_composed_where_the_gaze_was() {
 async fn a_foveated_h264_stream_decodes_in_the_page() {
     let f = Fixture::start(&[]).await;
     let page = f.page().await;
-    eval(&page, &change("codec", "e.value = 'h264'")).await;
-    eval(&page, &change("encoding", "e.value = 'lowpass'")).await;
-    wait_for(
+    choose_h264(
         &page,
-        "window.fovea.lastHeader && window.fovea.lastHeader.codec === 'h264' && window.fovea.player && window.fovea.player.decoded >= 1",
-        30,
+        Some("lowpass"),
+        "window.fovea.player && window.fovea.player.decoded >= 1",
     )
     .await;
-    assert_eq!(eval(&page, "window.fovea.codecNote").await, Value::Null);
     // Small moves (most blocks held) and a jump (the periphery taken again).
     for (x, y) in [
         (0.4, 0.5),

@@ -266,3 +266,24 @@ impl Fixture {
 pub fn change(id: &str, set: &str) -> String {
     format!("(() => {{ const e = document.getElementById('{id}'); {set}; e.dispatchEvent(new Event('change')); return true; }})()")
 }
+
+/// Chooses H.264 in the codec menu (and `encoding` in the encoding menu, if any), waits until
+/// an H.264 frame with `ready` true has arrived, and checks the page did not fall back to JPEG.
+pub async fn choose_h264(page: &Page, encoding: Option<&str>, ready: &str) {
+    eval(page, &change("codec", "e.value = 'h264'")).await;
+    if let Some(encoding) = encoding {
+        eval(
+            page,
+            &change("encoding", &format!("e.value = '{encoding}'")),
+        )
+        .await;
+    }
+    let js =
+        format!("window.fovea.lastHeader && window.fovea.lastHeader.codec === 'h264' && ({ready})");
+    wait_for(page, &js, 30).await;
+    assert_eq!(
+        eval(page, "window.fovea.codecNote").await,
+        Value::Null,
+        "no fallback to JPEG"
+    );
+}

@@ -16,8 +16,8 @@ use std::time::Duration;
 use serde_json::Value;
 
 use harness::{
-    artifacts, change, eval, gaze_and_frame, gaze_at, press, screenshot, wait_for, Fixture, Server,
-    COLOURS, CORNER, MARKER,
+    artifacts, change, choose_h264, eval, gaze_and_frame, gaze_at, press, screenshot, wait_for,
+    Fixture, Server, COLOURS, CORNER, MARKER,
 };
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
@@ -158,18 +158,12 @@ async fn h264_frames_decode_with_webcodecs_and_the_canvas_shows_the_scene() {
     let page = f.page().await;
     wait_for(&page, "window.fovea.framesShown >= 1", 30).await;
     let jpeg_corner: Vec<f64> = serde_json::from_value(eval(&page, CORNER).await).unwrap();
-    eval(&page, &change("codec", "e.value = 'h264'")).await;
-    wait_for(
+    choose_h264(
         &page,
-        "window.fovea.lastHeader && window.fovea.lastHeader.codec === 'h264' && window.fovea.player && window.fovea.player.decoded >= 1",
-        30,
+        None,
+        "window.fovea.player && window.fovea.player.decoded >= 1",
     )
     .await;
-    assert_eq!(
-        eval(&page, "window.fovea.codecNote").await,
-        Value::Null,
-        "no fallback"
-    );
     for (x, y) in [(0.3, 0.4), (0.6, 0.5), (0.45, 0.6)] {
         gaze_and_frame(&page, x, y).await;
     }
