@@ -385,7 +385,12 @@ mod tests {
     /// The rule of `merge` one block at a time, sample by sample: its twin.
     fn merge_by_block(picture: &mut I420, shown: &I420, thresholds: &[u8]) -> usize {
         let (w, h) = picture.dimensions();
-        let cols = blocks(w, h).0;
+        let (cols, rows) = blocks(w, h);
+        assert_eq!(
+            thresholds.len(),
+            cols * rows,
+            "the twin takes whole maps only"
+        );
         let planes = |q: &I420| [q.y().to_vec(), q.u().to_vec(), q.v().to_vec()];
         let (from, mut to) = (planes(shown), planes(picture));
         let mut held = 0;
