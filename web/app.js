@@ -110,14 +110,17 @@ export function connect() {
   };
 }
 
-// H.264 where this browser decodes it with WebCodecs (and the size is even, as 4:2:0 needs);
-// JPEG otherwise, saying why.
+// For `h264` and `auto` (the default: H.264 had JPEG's latency for about a quarter of its
+// bytes, docs/encoding.md): H.264 where this browser decodes it with WebCodecs and the size is
+// even, as 4:2:0 needs; JPEG otherwise, saying why in the stats (and, where H.264 was chosen,
+// in a banner after the welcome).
 async function chooseCodec(chosen, width, height) {
   state.codecNote = null;
-  if (chosen !== 'h264') return chosen;
-  if (width % 2 === 0 && height % 2 === 0 && await h264Supported(width, height)) return 'h264';
-  state.codecNote = 'H.264 needs WebCodecs with H.264 decoding, which this browser lacks: showing JPEG';
-  showBanner(state.codecNote, 'info', 6000);
+  if (chosen !== 'h264' && chosen !== 'auto') return chosen;
+  const even = width % 2 === 0 && height % 2 === 0;
+  if (even && await h264Supported(width, height)) return 'h264';
+  state.codecNote = even ? 'this browser has no WebCodecs H.264 decoder'
+    : `4:2:0 needs an even size, not ${width}×${height}`;
   return 'jpeg';
 }
 
@@ -150,6 +153,10 @@ function onText(text) {
     attempt = 0;
     state.moving = false;
     hideBanner();
+    // After the welcome, which clears the connection's banners.
+    if (state.codecNote && controls.codec.value === 'h264') {
+      showBanner(`H.264 cannot be shown (${state.codecNote}): showing JPEG`, 'info', 6000);
+    }
     state.welcome = msg;
     setStatus(`live · session ${msg.session}`, 'live');
     document.getElementById('adapter').textContent = `GPU: ${msg.adapter}`;
@@ -334,11 +341,12 @@ export function setAutoGaze(on) {
   }, 8);
 }
 
-// Twice a second: stats panel, sparklines, and the progress indicator for slow frames.
+// Four times a second: stats panel, sparklines, and the progress indicator for slow frames.
 setInterval(() => {
   const now = performance.now();
   state.stats.sample(now, state.lastHeader);
-  document.getElementById('overlay').textContent = overlayText(state.stats, state.lastHeader, now);
+  const note = state.codecNote ? `\nJPEG, not H.264: ${state.codecNote}` : '';
+  document.getElementById('overlay').textContent = overlayText(state.stats, state.lastHeader, now) + note;
   const h = state.stats.history;
   sparkline(document.getElementById('spark-latency'), h.latency);
   sparkline(document.getElementById('spark-fps'), h.fps);

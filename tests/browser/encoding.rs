@@ -1,4 +1,5 @@
-//! Foveated encoding in the page: an inset frame (a downscaled whole frame plus a
+//! Codecs and foveated encoding in the page: the default codec is H.264 where WebCodecs
+//! decodes it and JPEG where not; an inset frame (a downscaled whole frame plus a
 //! full-resolution square on the gaze) is composed on the canvas where the gaze was, and a
 //! low-passed, held H.264 stream decodes.
 
@@ -56,7 +57,8 @@ fn centre_and_gaze(h: &Value) -> ([f64; 2], [f64; 2]) {
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn an_inset_frame_is_composed_where_the_gaze_was() {
     let f = Fixture::start(&[]).await;
-    let page = f.page().await;
+    // Two JPEGs a frame (the H.264 inset has a test of its own).
+    let page = f.page_with("codec=jpeg").await;
     eval(&page, &change("encoding", "e.value = 'inset'")).await;
     wait_for(
         &page,
@@ -202,6 +204,65 @@ async fn a_foveated_h264_stream_decodes_in_the_page() {
     );
     assert!(eval(&page, "window.fovea.errors.length").await == 0);
     screenshot(&page, "h264-lowpass").await;
+    drop(page);
+    f.finish();
+}
+
+/// The stats panel says why the frames are JPEG, not H.264, below the frame they describe.
+const STATS_SAY_WHY: &str = "(() => { const t = document.getElementById('overlay').textContent; return t.includes('\\nJPEG, not H.264: ') && t.includes(' jpeg'); })()";
+
+/// The codec menu's default, `auto`: H.264 where the browser decodes it, JPEG where it has no
+/// WebCodecs, with the reason in the stats and no banner; a viewer who chose H.264 there is
+/// told in a banner.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn the_default_codec_is_h264_where_the_browser_decodes_it_and_jpeg_where_not() {
+    let f = Fixture::start(&[]).await;
+    let page = f.page().await;
+    let shown = "[document.getElementById('codec').value, window.fovea.lastHeader.codec, window.fovea.codecNote]";
+    assert_eq!(
+        eval(&page, shown).await,
+        serde_json::json!(["auto", "h264", null])
+    );
+    let colours: u64 = serde_json::from_value(eval(&page, COLOURS).await).unwrap();
+    assert!(
+        colours > 50,
+        "the frame shows the scene ({colours} colours)"
+    );
+    page.close().await.expect("page closes");
+
+    let page = f.page_without_webcodecs().await;
+    let got = eval(&page, shown).await;
+    assert_eq!(got[0], "auto");
+    assert_eq!(got[1], "jpeg", "no WebCodecs: {got}");
+    let note = got[2].as_str().unwrap_or_default().to_string();
+    assert!(note.contains("WebCodecs"), "the reason is kept: {got}");
+    wait_for(&page, STATS_SAY_WHY, 10).await;
+    let banner =
+        "[document.getElementById('banner').hidden, document.getElementById('banner').textContent]";
+    assert_eq!(
+        eval(&page, banner).await[0],
+        Value::Bool(true),
+        "the page's own choice needs no banner"
+    );
+    // Chosen by the viewer, the fallback is announced.
+    let connects = eval(&page, "window.fovea.connects").await.as_u64().unwrap();
+    eval(&page, &change("codec", "e.value = 'h264'")).await;
+    wait_for(
+        &page,
+        &format!("window.fovea.connects > {connects} && window.fovea.framesShown >= 1"),
+        30,
+    )
+    .await;
+    let b = eval(&page, banner).await;
+    assert_eq!(b[0], Value::Bool(false), "a banner: {b}");
+    assert!(
+        b[1].as_str().is_some_and(|t| t.contains("showing JPEG")),
+        "{b}"
+    );
+    assert_eq!(eval(&page, "window.fovea.lastHeader.codec").await, "jpeg");
+    assert!(eval(&page, "window.fovea.errors.length").await == 0);
+    wait_for(&page, STATS_SAY_WHY, 10).await;
+    screenshot(&page, "no-webcodecs").await;
     drop(page);
     f.finish();
 }

@@ -253,6 +253,32 @@ impl Fixture {
         open(&self.browser, &self.server.url).await
     }
 
+    /// A page of the server opened with `query` (as a shared link preselects the menus, e.g.
+    /// `codec=jpeg`), once it shows its first frame.
+    pub async fn page_with(&self, query: &str) -> Page {
+        open(&self.browser, &format!("{}/?{query}", self.server.url)).await
+    }
+
+    /// A page of the server in a browser without WebCodecs (removed before the page's own
+    /// scripts run), once it shows its first frame.
+    pub async fn page_without_webcodecs(&self) -> Page {
+        let page = self
+            .browser
+            .new_page("about:blank")
+            .await
+            .expect("page opens");
+        page.evaluate_on_new_document(
+            "delete window.VideoDecoder; delete window.EncodedVideoChunk;",
+        )
+        .await
+        .expect("script registered");
+        page.goto(self.server.url.as_str())
+            .await
+            .expect("page loads");
+        wait_for(&page, "window.fovea && window.fovea.framesShown >= 1", 60).await;
+        page
+    }
+
     /// Closes the browser, then stops the server; the server's exit status.
     pub fn finish(mut self) -> std::process::ExitStatus {
         self.events.abort();
