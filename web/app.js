@@ -31,6 +31,7 @@ const state = {
   pending: null,      // decoded frame waiting for the next animation frame
   player: null,       // the H.264 decoder of an h264 session
   codecNote: null,    // why the page shows another codec than the one chosen
+  h264Failed: null,   // why this page gave up on its H.264 decoder (until reloaded)
   lastImage: null,    // an inset frame's image bytes (both images), or its decoded H.264
                       // picture where keepPictures is set: for the browser tests
   keepPictures: false,
@@ -112,15 +113,16 @@ export function connect() {
 
 // For `h264` and `auto` (the default: H.264 had JPEG's latency for about a quarter of its
 // bytes, docs/encoding.md): H.264 where this browser decodes it with WebCodecs and the size is
-// even, as 4:2:0 needs; JPEG otherwise, saying why in the stats (and, where H.264 was chosen,
-// in a banner after the welcome).
+// even, as 4:2:0 needs, and its decoder has not failed on this page; JPEG otherwise, saying
+// why in the stats (and, where H.264 was chosen, in a banner after the welcome).
 async function chooseCodec(chosen, width, height) {
   state.codecNote = null;
   if (chosen !== 'h264' && chosen !== 'auto') return chosen;
   const even = width % 2 === 0 && height % 2 === 0;
-  if (even && await h264Supported(width, height)) return 'h264';
-  state.codecNote = even ? 'this browser has no WebCodecs H.264 decoder'
-    : `4:2:0 needs an even size, not ${width}×${height}`;
+  if (even && !state.h264Failed && await h264Supported(width, height)) return 'h264';
+  if (state.h264Failed) state.codecNote = 'its decoder kept failing here (reload to retry)';
+  else if (even) state.codecNote = 'this browser has no WebCodecs H.264 decoder';
+  else state.codecNote = `4:2:0 needs an even size, not ${width}×${height}`;
   return 'jpeg';
 }
 
@@ -171,6 +173,11 @@ function onText(text) {
         onPicture: presentPicture,
         onDropped: (header) => { state.stats.dropped += 1; ack(header.frame, true); },
         askKeyframe: () => send({ type: 'keyframe' }),
+        onFailed: (why) => {
+          console.warn(`giving up on H.264: ${why}`);
+          state.h264Failed = why;
+          connect();
+        },
       });
     }
     const link = document.getElementById('recording');

@@ -266,3 +266,42 @@ async fn the_default_codec_is_h264_where_the_browser_decodes_it_and_jpeg_where_n
     drop(page);
     f.finish();
 }
+
+/// A browser that says it decodes H.264 and then cannot (as a broken hardware decoder does):
+/// after three failures in a row without a picture the page gives up on H.264 and shows JPEG,
+/// saying why, instead of asking for keyframes for ever.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn a_decoder_that_keeps_failing_falls_back_to_jpeg() {
+    let f = Fixture::start(&[]).await;
+    let page = f
+        .page_after(
+            "window.VideoDecoder = class extends window.VideoDecoder { \
+             decode() { throw new Error('a decoder that cannot decode (test)'); } };",
+        )
+        .await;
+    let got = eval(
+        &page,
+        "[window.fovea.lastHeader.codec, window.fovea.h264Failed, window.fovea.connects]",
+    )
+    .await;
+    assert_eq!(got[0], "jpeg", "{got}");
+    let why = got[1].as_str().unwrap_or_default();
+    assert!(
+        why.contains("3 times in a row") && why.contains("cannot decode (test)"),
+        "{got}"
+    );
+    assert_eq!(got[2], 2, "one H.264 session, then one JPEG session: {got}");
+    wait_for(&page, STATS_SAY_WHY, 10).await;
+    // It stays on JPEG: a scene change does not try the failed decoder again.
+    eval(&page, &change("scene", "e.value = 'bunny-marble'")).await;
+    wait_for(
+        &page,
+        "window.fovea.connects === 3 && window.fovea.framesShown >= 1",
+        30,
+    )
+    .await;
+    assert_eq!(eval(&page, "window.fovea.lastHeader.codec").await, "jpeg");
+    assert!(eval(&page, "window.fovea.errors.length").await == 0);
+    drop(page);
+    f.finish();
+}

@@ -262,16 +262,21 @@ impl Fixture {
     /// A page of the server in a browser without WebCodecs (removed before the page's own
     /// scripts run), once it shows its first frame.
     pub async fn page_without_webcodecs(&self) -> Page {
+        self.page_after("delete window.VideoDecoder; delete window.EncodedVideoChunk;")
+            .await
+    }
+
+    /// A page of the server with `script` run before the page's own (to change what the
+    /// browser offers), once it shows its first frame.
+    pub async fn page_after(&self, script: &str) -> Page {
         let page = self
             .browser
             .new_page("about:blank")
             .await
             .expect("page opens");
-        page.evaluate_on_new_document(
-            "delete window.VideoDecoder; delete window.EncodedVideoChunk;",
-        )
-        .await
-        .expect("script registered");
+        page.evaluate_on_new_document(script)
+            .await
+            .expect("script registered");
         page.goto(self.server.url.as_str())
             .await
             .expect("page loads");
