@@ -30,7 +30,7 @@ const state = {
   moving: false,      // a goodbye came and no new session has said welcome yet
   pending: null,      // decoded frame waiting for the next animation frame
   player: null,       // the H.264 decoder of an h264 session
-  codecNote: null,    // why the page shows another codec than the one chosen
+  codecNote: null,    // why the page shows JPEG where H.264 was chosen (or `auto`)
   h264Failed: null,   // why this page gave up on its H.264 decoder (until reloaded)
   lastImage: null,    // an inset frame's image bytes (both images), or its decoded H.264
                       // picture where keepPictures is set: for the browser tests

@@ -57,10 +57,10 @@ export class H264Player {
 
   // Restarts the decoder and asks for a keyframe, or gives up after too many failures.
   failed(what, e) {
-    console.warn(`${what}; asking for a keyframe`, e);
     this.errors += 1;
     this.failing += 1;
     if (this.failing < GIVE_UP_AFTER) {
+      console.warn(`${what}; asking for a keyframe`, e);
       this.restart();
       return;
     }
