@@ -6,7 +6,7 @@
 use serde_json::Value;
 
 use crate::harness::{
-    change, choose_h264, eval, gaze_and_frame, screenshot, wait_for, Fixture, COLOURS,
+    change, choose, choose_h264, eval, gaze_and_frame, screenshot, wait_for, Fixture, COLOURS,
 };
 
 /// The mean absolute difference between the canvas and the inset image drawn alone, over the
@@ -245,14 +245,7 @@ async fn the_default_codec_is_h264_where_the_browser_decodes_it_and_jpeg_where_n
         "the page's own choice needs no banner"
     );
     // Chosen by the viewer, the fallback is announced.
-    let connects = eval(&page, "window.fovea.connects").await.as_u64().unwrap();
-    eval(&page, &change("codec", "e.value = 'h264'")).await;
-    wait_for(
-        &page,
-        &format!("window.fovea.connects > {connects} && window.fovea.framesShown >= 1"),
-        30,
-    )
-    .await;
+    choose(&page, "codec", "h264", 30).await;
     let b = eval(&page, banner).await;
     assert_eq!(b[0], Value::Bool(false), "a banner: {b}");
     assert!(
@@ -293,14 +286,13 @@ async fn a_decoder_that_keeps_failing_falls_back_to_jpeg() {
     assert_eq!(got[2], 2, "one H.264 session, then one JPEG session: {got}");
     wait_for(&page, STATS_SAY_WHY, 10).await;
     // It stays on JPEG: a scene change does not try the failed decoder again.
-    eval(&page, &change("scene", "e.value = 'bunny-marble'")).await;
-    wait_for(
+    choose(&page, "scene", "bunny-marble", 30).await;
+    let got = eval(
         &page,
-        "window.fovea.connects === 3 && window.fovea.framesShown >= 1",
-        30,
+        "[window.fovea.connects, window.fovea.lastHeader.codec]",
     )
     .await;
-    assert_eq!(eval(&page, "window.fovea.lastHeader.codec").await, "jpeg");
+    assert_eq!(got, serde_json::json!([3, "jpeg"]));
     assert!(eval(&page, "window.fovea.errors.length").await == 0);
     drop(page);
     f.finish();

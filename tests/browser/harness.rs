@@ -298,6 +298,16 @@ pub fn change(id: &str, set: &str) -> String {
     format!("(() => {{ const e = document.getElementById('{id}'); {set}; e.dispatchEvent(new Event('change')); return true; }})()")
 }
 
+/// Sets menu `id` to `value` as a viewer does, and waits up to `seconds` until the session it
+/// opens shows a frame.
+pub async fn choose(page: &Page, id: &str, value: &str, seconds: u64) {
+    let connects = eval(page, "window.fovea.connects").await.as_u64();
+    let connects = connects.expect("a connection count");
+    eval(page, &change(id, &format!("e.value = '{value}'"))).await;
+    let shown = format!("window.fovea.connects > {connects} && window.fovea.framesShown >= 1");
+    wait_for(page, &shown, seconds).await;
+}
+
 /// Chooses H.264 in the codec menu (and `encoding` in the encoding menu, if any), waits until
 /// an H.264 frame with `ready` true has arrived, and checks the page did not fall back to JPEG.
 pub async fn choose_h264(page: &Page, encoding: Option<&str>, ready: &str) {

@@ -16,8 +16,8 @@ use std::time::Duration;
 use serde_json::Value;
 
 use harness::{
-    artifacts, change, choose_h264, eval, gaze_and_frame, gaze_at, press, screenshot, wait_for,
-    Fixture, Server, COLOURS, CORNER, MARKER,
+    artifacts, change, choose, choose_h264, eval, gaze_and_frame, gaze_at, press, screenshot,
+    wait_for, Fixture, Server, COLOURS, CORNER, MARKER,
 };
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
@@ -121,14 +121,7 @@ async fn switching_scene_size_and_codec_keeps_showing_frames() {
         ("codec", "png", "switch-codec"),
         ("scene", "bunny-marble", "switch-back"),
     ] {
-        let connects = eval(&page, "window.fovea.connects").await.as_u64().unwrap();
-        eval(&page, &format!("(() => {{ const s = document.getElementById('{control}'); s.value = '{value}'; s.dispatchEvent(new Event('change')); return true; }})()")).await;
-        wait_for(
-            &page,
-            &format!("window.fovea.connects > {connects} && window.fovea.framesShown >= 1"),
-            20,
-        )
-        .await;
+        choose(&page, control, value, 20).await;
         let colours: u64 = serde_json::from_value(eval(&page, COLOURS).await).unwrap();
         assert!(
             colours > 20,
@@ -392,14 +385,7 @@ async fn a_served_gltf_scene_is_offered_and_dragging_turns_its_camera() {
         offered.as_array().unwrap().iter().any(|v| v == "lamps"),
         "the page offers the served glTF scene: {offered}"
     );
-    let connects = eval(&page, "window.fovea.connects").await.as_u64().unwrap();
-    eval(&page, "(() => { const s = document.getElementById('scene'); s.value = 'lamps'; s.dispatchEvent(new Event('change')); return true; })()").await;
-    wait_for(
-        &page,
-        &format!("window.fovea.connects > {connects} && window.fovea.framesShown >= 1"),
-        30,
-    )
-    .await;
+    choose(&page, "scene", "lamps", 30).await;
     screenshot(&page, "lamps-before-drag").await;
     const PIXELS: &str = "(() => { const c = document.getElementById('view'); const d = c.getContext('2d').getImageData(0, 0, c.width, c.height).data; let h = 0; for (let i = 0; i < d.length; i += 97) h = (h * 31 + d[i]) >>> 0; return h; })()";
     let before = eval(&page, PIXELS).await;
