@@ -69,7 +69,7 @@ impl QpCap {
 }
 
 /// A target's bits per pixel of a frame at 60 fps (0 for an empty picture).
-pub fn bits_per_pixel(kbps: u32, width: u32, height: u32) -> f64 {
+fn bits_per_pixel(kbps: u32, width: u32, height: u32) -> f64 {
     let pixels = f64::from(width) * f64::from(height);
     if pixels > 0.0 {
         f64::from(kbps) * 1000.0 / (pixels * 60.0)

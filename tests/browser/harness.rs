@@ -259,13 +259,6 @@ impl Fixture {
         open(&self.browser, &format!("{}/?{query}", self.server.url)).await
     }
 
-    /// A page of the server in a browser without WebCodecs (removed before the page's own
-    /// scripts run), once it shows its first frame.
-    pub async fn page_without_webcodecs(&self) -> Page {
-        self.page_after("delete window.VideoDecoder; delete window.EncodedVideoChunk;")
-            .await
-    }
-
     /// A page of the server with `script` run before the page's own (to change what the
     /// browser offers), once it shows its first frame.
     pub async fn page_after(&self, script: &str) -> Page {
