@@ -278,6 +278,49 @@ fn a_moving_picture_frees_the_quantiser_to_hold_the_bitrate() {
     assert!(moving.iter().all(|f| f.2 > 20.0), "{moving:?}");
 }
 
+/// Keyframes by the stream's clock: a still picture gets one every `keyframe_every` and none
+/// between (the guard's checks cost nothing while it keeps its range); a camera move frees
+/// the quantiser with one, and the first check after the picture is still again restores the
+/// fine range with another.
+#[test]
+fn keyframes_come_at_the_period_and_where_the_range_switches_and_nowhere_else() {
+    use fovea::encode::h264::GUARD_CHECK_MS;
+    // `zoom(k)`: frame k's picture; frames 1/30 s apart from 1 s (so 10 s on is a frame).
+    let keys_of = |zoom: &dyn Fn(u64) -> u64, frames: u64| {
+        let mut stream = H264Stream::new(H264Config {
+            kbps: 300,
+            keyframe_every: Duration::from_secs(10),
+        });
+        let mut decoder = Decoder::new().unwrap();
+        let mut keys = Vec::new();
+        for k in 0..frames {
+            let ms = 1000 + k * 100 / 3;
+            let rgba = pattern(zoom(k));
+            let f = stream.encode_at(&rgba, 320, 240, ms).unwrap();
+            let back = decode(&mut decoder, &f.bytes);
+            assert!(psnr(&rgba, &back) > 20.0, "frame {k}");
+            if f.keyframe {
+                keys.push(ms - 1000);
+            }
+        }
+        keys
+    };
+    // Still for 25 s: at 0, 10 and 20 s only.
+    let still = keys_of(&|_| 0, 750);
+    assert_eq!(still, [0, 10_000, 20_000], "still");
+    // Zooming in from 1 s to 1.6 s, still after: the guard frees the quantiser with a keyframe
+    // and is back at the first check (every GUARD_CHECK_MS from the first frame), the picture
+    // having been still for six P-frames by then.
+    let moving = keys_of(&|k| k.clamp(30, 48) - 30, 180);
+    assert_eq!(
+        moving.len(),
+        3,
+        "the first, to the target, back: {moving:?}"
+    );
+    assert!(moving[1] > 1000 && moving[1] < 1600, "{moving:?}");
+    assert_eq!(moving[2], GUARD_CHECK_MS, "{moving:?}");
+}
+
 /// One frame of `scene` rendered with the gaze at the centre.
 fn still(scene: &str, w: u32, h: u32) -> Vec<u8> {
     let mut renderer = Renderer::new().unwrap_or_else(|e| panic!("GPU tests need an adapter: {e}"));

@@ -268,6 +268,7 @@ pub fn replay(a: ReplayArgs) -> Result<()> {
         "loops": a.loops,
         "codec": a.encoding.codec.name(),
         "bitrate_kbps": a.encoding.bitrate_kbps,
+        "keyframe_s": a.encoding.keyframe_s,
         "foveated_encoding": a.encoding.foveated_encoding,
         "inset_deg": a.encoding.inset_deg,
     });

@@ -185,6 +185,7 @@ pub fn load(a: LoadArgs) -> Result<()> {
             "codec": a.encoding.codec.name(),
             "mix_codecs": a.mix_codecs.iter().map(|c| c.name()).collect::<Vec<_>>(),
             "bitrate_kbps": a.encoding.bitrate_kbps,
+            "keyframe_s": a.encoding.keyframe_s,
             "foveated_encoding": a.encoding.foveated_encoding,
             "inset_deg": a.encoding.inset_deg,
         },

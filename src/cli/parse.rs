@@ -72,6 +72,12 @@ pub fn distance_cm(s: &str) -> Result<f64, String> {
     number_in(s, 1.0, 10_000.0)
 }
 
+/// `--keyframe-s`: the range a `hello` is held to.
+pub fn keyframe_s(s: &str) -> Result<f64, String> {
+    let (lo, hi) = fovea::encode::h264::KEYFRAME_S_RANGE;
+    number_in(s, lo, hi)
+}
+
 /// A finite number in [lo, hi] from a flag.
 pub fn number_in(s: &str, lo: f64, hi: f64) -> Result<f64, String> {
     let v: f64 = s.trim().parse().map_err(|e| format!("{s:?}: {e}"))?;
@@ -90,6 +96,9 @@ pub struct EncodingArgs {
     /// H.264 bitrate, kbit/s (100 to 50000; default: the server's, 4000).
     #[arg(long)]
     pub bitrate_kbps: Option<u32>,
+    /// H.264: a keyframe at least this often, seconds (0.1 to 60; default: the server's, 10).
+    #[arg(long, value_parser = keyframe_s)]
+    pub keyframe_s: Option<f64>,
     /// Low-pass the periphery to what the eye resolves before encoding (any codec).
     #[arg(long)]
     pub foveated_encoding: bool,
@@ -105,6 +114,7 @@ impl EncodingArgs {
         fovea::protocol::Hello {
             codec: self.codec,
             bitrate_kbps: self.bitrate_kbps,
+            keyframe_s: self.keyframe_s,
             foveated_encoding: self.foveated_encoding,
             inset_deg: self.inset_deg,
             ..Default::default()
@@ -134,5 +144,16 @@ mod tests {
         }
         assert!(parse_seconds("0.016").is_err());
         assert!(parse_seconds("0.1").is_ok());
+    }
+
+    /// `--keyframe-s` refuses what the server's hello would, before connecting.
+    #[test]
+    fn a_keyframe_period_is_held_to_the_hellos_range() {
+        for ok in ["0.1", "2", "10", "60"] {
+            assert!(keyframe_s(ok).is_ok(), "{ok}");
+        }
+        for bad in ["0", "0.09", "60.5", "nan", "inf", "-2", ""] {
+            assert!(keyframe_s(bad).is_err(), "{bad}");
+        }
     }
 }

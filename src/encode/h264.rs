@@ -1,7 +1,8 @@
 //! H.264 for one session: an openh264 encoder that outputs every frame at once (no B-frames,
 //! no frame skipping, no reordering: a browser's WebCodecs decoder shows each frame as it
 //! arrives), a keyframe at the start, on request, after a size change and every
-//! `keyframe_every`, and the bitrate held by a quantiser range that `rate_guard` picks.
+//! `keyframe_every`, and the bitrate held by a quantiser range that `rate_guard` picks (it
+//! looks every `GUARD_CHECK_MS` of the stream's clock; only a switch costs a keyframe).
 //!
 //! Frames are converted from RGBA by `encode::yuv` (BT.601 full range, rounded; openh264's own
 //! converter truncates, which FLIP counts) and the
@@ -37,9 +38,18 @@ use super::EncodeError;
 pub const DEFAULT_KBPS: u32 = 4000;
 /// The bitrates a session may ask for, kbit/s.
 pub const KBPS_RANGE: (u32, u32) = (100, 50_000);
-/// A keyframe at least this often by default, so a client that joins or loses a frame
-/// recovers within it.
-pub const DEFAULT_KEYFRAME_S: f64 = 2.0;
+/// A keyframe at least this often by default. The WebSocket loses no frame and a client whose
+/// decoder fails asks for a keyframe, so this is only a backstop: at 2 s, which it was, a
+/// still `gallery` session at 640×480 on a software adapter (~6 frames a second) spent 241 of
+/// its 375 kbit/s on 60 kB keyframes, each a few ms later to the screen than a P-frame
+/// (docs/encoding.md, "Keyframes").
+pub const DEFAULT_KEYFRAME_S: f64 = 10.0;
+/// The keyframe periods a session may ask for, seconds.
+pub const KEYFRAME_S_RANGE: (f64, f64) = (0.1, 60.0);
+/// How often, by the stream's clock, the rate guard may switch the quantiser's range back to
+/// quality (`RateGuard::decide`'s check); a switch costs a keyframe, a check that keeps the
+/// range costs nothing. 2 s: the keyframe period the guard's back-off was set with.
+pub const GUARD_CHECK_MS: u64 = 2000;
 
 /// H.264 settings of one stream.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -100,7 +110,9 @@ pub struct H264Stream {
     config: H264Config,
     encoder: Option<Encoder>,
     size: (u32, u32),
-    last_keyframe: Option<Instant>,
+    /// By the stream's clock (ms), as are the guard's checks.
+    last_keyframe: Option<u64>,
+    last_check: u64,
     keyframe_asked: bool,
     /// The stream's clock: rate control spends bits by the time between frames.
     started: Instant,
@@ -140,6 +152,7 @@ impl H264Stream {
             encoder: None,
             size: (0, 0),
             last_keyframe: None,
+            last_check: 0,
             keyframe_asked: true,
             started: Instant::now(),
             last_ms: 0,
@@ -275,10 +288,6 @@ impl H264Stream {
         if !width.is_multiple_of(2) || !height.is_multiple_of(2) || width == 0 || height == 0 {
             return Err(EncodeError::OddSize(width, height));
         }
-        let now = Instant::now();
-        let due = self
-            .last_keyframe
-            .is_none_or(|t| now.duration_since(t) >= self.config.keyframe_every);
         let (w, h) = (width as usize, height as usize);
         let (len, expected) = match picture {
             Picture::Rgba(p) => (p.len(), w * h * 4),
@@ -296,10 +305,17 @@ impl H264Stream {
         let ms = ms.max(self.last_ms + 1);
         let since_last = ms - self.last_ms;
         self.last_ms = ms;
-        if let Switch::To(cap) = self
-            .guard
-            .decide(f64::from(self.config.kbps), due || self.keyframe_asked)
-        {
+        let every = u64::try_from(self.config.keyframe_every.as_millis()).unwrap_or(u64::MAX);
+        let due = self
+            .last_keyframe
+            .is_none_or(|t| ms.saturating_sub(t) >= every);
+        // A keyframe sent anyway is a free check; else one every GUARD_CHECK_MS.
+        let check =
+            due || self.keyframe_asked || ms.saturating_sub(self.last_check) >= GUARD_CHECK_MS;
+        if check {
+            self.last_check = ms;
+        }
+        if let Switch::To(cap) = self.guard.decide(f64::from(self.config.kbps), check) {
             tracing::debug!(
                 ?cap,
                 kbps = self.config.kbps,
@@ -334,7 +350,7 @@ impl H264Stream {
             )));
         }
         if keyframe {
-            self.last_keyframe = Some(now);
+            self.last_keyframe = Some(ms);
             self.keyframe_asked = false;
         }
         self.guard.record(bytes.len(), keyframe, since_last);

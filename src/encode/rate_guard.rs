@@ -15,10 +15,12 @@
 //!   renderer's frames get the time they took; the median, so one saccade's large frame does
 //!   not count): a moving picture; the next frame is a keyframe of a new encoder whose
 //!   quantiser is free, and rate control holds the target from there;
-//! * **target → quality** only at a periodic keyframe (one the stream sends anyway): where the
-//!   last `WINDOW` P-frames came at a median rate under `CALM` of the target (the picture is still enough
-//!   that QP ≤ 22 fits), or else as a try, at the first such keyframe and then, each time a try
-//!   overruns again within `TRIAL` P-frames, at every 2nd, 4th, up to `MAX_TRY_EVERY`th one.
+//! * **target → quality** only at a check (every 2 s of the stream, `h264::GUARD_CHECK_MS`, and
+//!   at any keyframe sent anyway): where the last `WINDOW` P-frames came at a median rate under
+//!   `CALM` of the target (the picture is still enough that QP ≤ 22 fits), or else as a try, at
+//!   the first such check and then, each time a try overruns again within `TRIAL` P-frames, at
+//!   every 2nd, 4th, up to `MAX_TRY_EVERY`th one. (The checks were the periodic keyframes
+//!   until those became 10 s apart: a check that keeps the range costs nothing.)
 //!   The rate alone cannot tell: a still picture with the quantiser free spends 0.35 of a
 //!   4000 kbit/s target but 0.64 of a 1000 kbit/s one, about what QP ≤ 22 would (the free
 //!   range stays near its keyframe's quality instead: foveal FLIP 0.100 against 0.077, 640×480
@@ -82,7 +84,7 @@ fn bits_per_pixel(kbps: u32, width: u32, height: u32) -> f64 {
 pub const WINDOW: usize = 6;
 /// Quality → target above this many times the target rate.
 pub const OVER: f64 = 2.0;
-/// Target → quality (at a periodic keyframe) under this share of the target rate.
+/// Target → quality (at a check) under this share of the target rate.
 pub const CALM: f64 = 0.5;
 
 /// What a stream should do with its encoder before the next frame.
@@ -95,7 +97,7 @@ pub enum Switch {
 
 /// A try of the fine range that overruns within this many P-frames failed.
 pub const TRIAL: usize = 2 * WINDOW;
-/// The most periodic keyframes between tries.
+/// The most checks between tries.
 pub const MAX_TRY_EVERY: u32 = 8;
 
 /// One stream's recent P-frames (bytes, ms since the frame before) and its current range.
@@ -107,8 +109,8 @@ pub struct RateGuard {
     since_switch: usize,
     /// At the fine range as a try (not since the stream began).
     trying: bool,
-    /// Periodic keyframes at the target range since the last switch, and how many to wait
-    /// before trying the fine range again.
+    /// Checks at the target range since the last switch, and how many to wait before trying
+    /// the fine range again.
     waited: u32,
     try_every: u32,
 }
@@ -144,9 +146,9 @@ impl RateGuard {
         self.recent.push_back((bytes, ms));
     }
 
-    /// Before encoding a frame: `kbps` is the target, `keyframe_due` that this frame is a
-    /// keyframe anyway.
-    pub fn decide(&mut self, kbps: f64, keyframe_due: bool) -> Switch {
+    /// Before encoding a frame: `kbps` is the target, `check` that the range may go back to
+    /// quality at this frame (a check is due, or the frame is a keyframe anyway).
+    pub fn decide(&mut self, kbps: f64, check: bool) -> Switch {
         if !(kbps > 0.0) {
             return Switch::Keep;
         }
@@ -161,7 +163,7 @@ impl RateGuard {
                 };
                 self.switch(QpCap::Target)
             }
-            QpCap::Target if keyframe_due => {
+            QpCap::Target if check => {
                 self.waited += 1;
                 let calm = rate.is_some_and(|r| r < CALM * kbps);
                 if calm || self.waited >= self.try_every {
@@ -255,11 +257,11 @@ mod tests {
     }
 
     #[test]
-    fn the_target_returns_to_quality_only_at_a_periodic_keyframe() {
+    fn the_target_returns_to_quality_only_at_a_check() {
         let mut g = RateGuard::default();
         feed(&mut g, 10_000, WINDOW);
         assert_eq!(g.decide(1000.0, false), Switch::To(QpCap::Target));
-        // Calm, but no keyframe due: a switch would cost one, so wait.
+        // Calm, but no check due: switches (each a keyframe) stay rare.
         feed(&mut g, 300, WINDOW);
         assert_eq!(g.decide(1000.0, false), Switch::Keep);
         assert_eq!(g.decide(1000.0, true), Switch::To(QpCap::Quality));
@@ -268,7 +270,7 @@ mod tests {
     #[test]
     fn tries_of_the_fine_range_back_off_while_the_picture_keeps_moving() {
         let mut g = RateGuard::default();
-        // Keyframes due while at the target range, before each try; the picture keeps moving.
+        // Checks while at the target range, before each try; the picture keeps moving.
         let mut waits = Vec::new();
         for _ in 0..6 {
             feed(&mut g, 10_000, WINDOW);

@@ -173,7 +173,8 @@ fn validate_hello(h: &Hello, limits: &Limits) -> Result<(), ProtocolError> {
         in_range("bitrate_kbps", f64::from(k), f64::from(lo), f64::from(hi))?;
     }
     if let Some(s) = h.keyframe_s {
-        in_range("keyframe_s", s, 0.1, 60.0)?;
+        let (lo, hi) = crate::encode::h264::KEYFRAME_S_RANGE;
+        in_range("keyframe_s", s, lo, hi)?;
     }
     if let Some(d) = h.inset_deg {
         let (lo, hi) = crate::encode::inset::INSET_DEG_RANGE;
