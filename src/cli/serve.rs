@@ -226,7 +226,8 @@ fn fit_descriptors(limits: &mut fovea::server::ConnectionLimits, max_sessions: u
             lim = raised;
         }
     }
-    let fit = u64::from(lim.rlim_cur)
+    let fit = lim
+        .rlim_cur
         .saturating_sub(RESERVE + 2 * max_sessions as u64)
         .max(8);
     if (limits.max_pending as u64) > fit {

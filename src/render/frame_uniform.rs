@@ -162,6 +162,5 @@ pub(super) fn frame_uniform(
         shade_rows: [0, h],
         shadow_view_proj: shadow.view_proj.to_cols_array_2d(),
         shadow_params: shadow.params,
-        ..FrameUniform::default()
     }
 }

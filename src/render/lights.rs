@@ -156,7 +156,6 @@ pub fn gpu_light(l: &LightSpec) -> GpuLight {
         axis_cos_outer: p.axis.extend(p.cos_outer).to_array(),
         cone: [p.cos_inner, 0.0, 0.0, 0.0],
         shadow: [-1.0, 0.0, 0.0, 0.0],
-        ..Default::default()
     }
 }
 
