@@ -41,8 +41,7 @@ pub const KBPS_RANGE: (u32, u32) = (100, 50_000);
 /// A keyframe at least this often by default. The WebSocket loses no frame and a client whose
 /// decoder fails asks for a keyframe, so this is only a backstop: at 2 s, which it was, a
 /// still `gallery` session at 640×480 on a software adapter (~6 frames a second) spent 241 of
-/// its 375 kbit/s on 60 kB keyframes, each a few ms later to the screen than a P-frame
-/// (docs/encoding.md, "Keyframes").
+/// its 375 kbit/s on 60 kB keyframes (docs/keyframes.md).
 pub const DEFAULT_KEYFRAME_S: f64 = 10.0;
 /// The keyframe periods a session may ask for, seconds.
 pub const KEYFRAME_S_RANGE: (f64, f64) = (0.1, 60.0);
