@@ -158,15 +158,10 @@ pub fn bench(a: BenchArgs) -> Result<()> {
     Ok(())
 }
 
-/// A one-line progress bar with an ETA, redrawn at most five times a second.
-fn progress_bar() -> impl FnMut(usize, usize, &str) {
+/// A one-line progress bar with an ETA (`cli::progress` says how often it is shown).
+fn progress_bar(line: &mut super::progress::Progress) -> impl FnMut(usize, usize, &str) + '_ {
     let started = std::time::Instant::now();
-    let mut last_draw = started - std::time::Duration::from_secs(1);
     move |done: usize, total: usize, what: &str| {
-        if last_draw.elapsed().as_millis() < 200 && done < total {
-            return;
-        }
-        last_draw = std::time::Instant::now();
         let frac = done as f64 / total.max(1) as f64;
         let eta = if frac > 0.0 {
             started.elapsed().as_secs_f64() * (1.0 - frac) / frac
@@ -176,10 +171,13 @@ fn progress_bar() -> impl FnMut(usize, usize, &str) {
         let bar: String = (0..30)
             .map(|i| if (i as f64) < frac * 30.0 { '#' } else { '-' })
             .collect();
-        eprint!(
-            "\r[{bar}] {done}/{total} ({:.0}%) ETA {:.0}s  {what:<28}",
-            frac * 100.0,
-            eta
+        line.show(
+            format_args!(
+                "[{bar}] {done}/{total} ({:.0}%) ETA {:.0}s  {what:<28}",
+                frac * 100.0,
+                eta
+            ),
+            done >= total,
         );
     }
 }
@@ -198,9 +196,9 @@ pub(super) fn with_renderer<R>(
     .context("installing the Ctrl-C handler")?;
     let mut renderer = Renderer::new().context("opening the GPU")?;
     eprintln!("adapter: {}", renderer.adapter());
-    let mut progress = progress_bar();
-    let out = sweep(&mut renderer, &stop, &mut progress);
-    eprintln!();
+    let mut line = super::progress::Progress::new();
+    let out = sweep(&mut renderer, &stop, &mut progress_bar(&mut line));
+    line.finish();
     out
 }
 

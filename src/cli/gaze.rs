@@ -235,18 +235,22 @@ pub fn replay(a: ReplayArgs) -> Result<()> {
         }
     });
     let started = std::time::Instant::now();
+    let mut line = super::progress::Progress::new();
     let (frames, summary) = runtime.block_on(fovea::client::replay::replay(
         &rec.samples,
         &opts,
         |done, total| {
-            eprint!(
-                "\rsent {done}/{total} samples ({:.0}%), {:.1} s",
-                100.0 * done as f64 / total.max(1) as f64,
-                started.elapsed().as_secs_f64()
+            line.show(
+                format_args!(
+                    "sent {done}/{total} samples ({:.0}%), {:.1} s",
+                    100.0 * done as f64 / total.max(1) as f64,
+                    started.elapsed().as_secs_f64()
+                ),
+                done >= total,
             );
         },
     ))?;
-    eprintln!();
+    line.finish();
     // Provenance: what was replayed, how, and against what, beside the figures.
     let mut summary = serde_json::to_value(&summary)?;
     summary["recording"] = serde_json::json!({

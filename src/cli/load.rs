@@ -121,10 +121,18 @@ pub fn load(a: LoadArgs) -> Result<()> {
             codecs: a.mix_codecs.clone(),
         };
         let total = duration.as_secs_f64();
+        // `run` wants a shareable callback; the line is touched once a second.
+        let line = std::sync::Arc::new(std::sync::Mutex::new(super::progress::Progress::new()));
+        let shown = line.clone();
         let report = runtime.block_on(fovea::client::load::run(&opts, move |sessions, t| {
-            eprint!("\r{sessions} sessions: {t:.0}/{total:.0} s");
+            if let Ok(mut line) = shown.lock() {
+                let text = format_args!("{sessions} sessions: {t:.0}/{total:.0} s");
+                line.show(text, t >= total);
+            }
         }));
-        eprintln!();
+        if let Ok(mut line) = line.lock() {
+            line.finish();
+        }
         println!(
             "{} sessions: {} frames, {:.2} fps total, {:.2}–{:.2} fps per session (fairness {:.2}), gaze→frame p50 {:.1} p95 {:.1} p99 {:.1} max {:.1} ms; render p50 {:.1} ms; samples coalesced {}; errors {}, refused {}, failed {}",
             n,

@@ -6,6 +6,7 @@ pub mod codecs;
 pub mod gaze;
 pub mod load;
 pub mod parse;
+pub mod progress;
 pub mod radiosity;
 pub mod scenes;
 pub mod serve;
