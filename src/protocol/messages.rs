@@ -29,7 +29,7 @@ pub struct Hello {
     /// H.264 bitrate, kbit/s (default 4000); ignored by the other codecs.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub bitrate_kbps: Option<u32>,
-    /// H.264: a keyframe at least every this many seconds (default 2).
+    /// H.264: a keyframe at least every this many seconds (default 10, 0.1–60).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub keyframe_s: Option<f64>,
     /// Low-pass the periphery to what the eye resolves there before encoding (any codec).
