@@ -355,6 +355,9 @@ async fn ctrl_c_mid_replay_leaves_complete_outputs() {
         "{summary}"
     );
     assert!(rows > 0);
+    // JPEG frames have no keyframes: the column is empty, the count none.
+    assert!(csv.lines().skip(1).all(|l| l.ends_with(',')), "{csv}");
+    assert_eq!(summary["keyframes"], 0, "{summary}");
     // Provenance: what was replayed, how, and against which server.
     assert_eq!(summary["recording"]["format"], "eyelink", "{summary}");
     assert_eq!(summary["recording"]["screen"], "1920x1200", "{summary}");
@@ -394,12 +397,21 @@ async fn an_h264_replay_saves_a_playable_stream() {
         .unwrap();
     let stderr = String::from_utf8_lossy(&run.stderr);
     assert!(run.status.success(), "{stderr}");
-    let rows = std::fs::read_to_string(out.join("frames.csv"))
-        .unwrap()
-        .lines()
-        .count()
-        - 1;
+    let csv = std::fs::read_to_string(out.join("frames.csv")).unwrap();
+    let rows = csv.lines().count() - 1;
     assert!(rows >= 2, "{rows} frames");
+    // The keyframe column: the stream's first frame is one, and 1.5 s holds no periodic one.
+    let header: Vec<&str> = csv.lines().next().unwrap().split(',').collect();
+    let column = |name: &str| header.iter().position(|c| *c == name).unwrap();
+    let (key, bytes) = (column("keyframe"), column("bytes"));
+    let cells: Vec<Vec<&str>> = csv
+        .lines()
+        .skip(1)
+        .map(|l| l.split(',').collect())
+        .collect();
+    let keys: Vec<&str> = cells.iter().map(|c| c[key]).collect();
+    assert_eq!(keys[0], "1", "{csv}");
+    assert!(keys[1..].iter().all(|k| *k == "0"), "{csv}");
     let stream = std::fs::read(out.join("frames/stream-0.h264")).unwrap();
     let mut decoder = openh264::decoder::Decoder::new().unwrap();
     let mut pictures = 0;
@@ -417,6 +429,11 @@ async fn an_h264_replay_saves_a_playable_stream() {
         serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
     assert_eq!(summary["asked"]["codec"], "h264", "{summary}");
     assert_eq!(summary["server"]["codec"], "h264", "{summary}");
+    assert_eq!(summary["keyframes"], 1, "{summary}");
+    assert_eq!(
+        summary["keyframe_bytes"],
+        cells[0][bytes].parse::<u64>().unwrap()
+    );
     let _ = std::fs::remove_dir_all(&out);
     shutdown.stop().await;
 }

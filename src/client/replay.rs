@@ -60,6 +60,8 @@ pub struct FrameRecord {
     pub bytes: usize,
     /// Gaze samples the server had received when it made this frame.
     pub server_samples: u64,
+    /// H.264: whether the frame is a keyframe (the header says; none for other codecs).
+    pub keyframe: Option<bool>,
     #[serde(skip)]
     pub image: Option<Vec<u8>>,
     /// What the image bytes are (`saved_frames` writes each as the file it is).
@@ -100,6 +102,9 @@ pub struct ReplaySummary {
     /// Image bytes received, and their rate over the replay, kbit/s.
     pub bytes: u64,
     pub kbit_s: f64,
+    /// H.264: the keyframes received and their bytes (of `bytes`); 0 for other codecs.
+    pub keyframes: u64,
+    pub keyframe_bytes: u64,
     /// What the server granted, for the provenance of the figures.
     pub server: ServerInfo,
 }
@@ -260,6 +265,7 @@ pub async fn replay(
                     sampled: h.sampled,
                     bytes: image.len(),
                     server_samples: h.samples,
+                    keyframe: h.keyframe,
                     image: keep.then_some(image),
                     codec: h.codec,
                     inset_bytes: h.inset.map(|i| i.inset_bytes).filter(|n| *n > 0),
@@ -329,6 +335,7 @@ pub async fn replay(
         seqs.len() as u64
     };
     let mut latencies: Vec<f64> = frames.iter().filter_map(|f| f.latency_ms).collect();
+    let keyframes: Vec<&FrameRecord> = frames.iter().filter(|f| f.keyframe == Some(true)).collect();
     let summary = ReplaySummary {
         samples_in_selection: total,
         samples_sent: sent_count,
@@ -350,6 +357,8 @@ pub async fn replay(
         kbit_s: frames.iter().map(|f| f.bytes as f64).sum::<f64>() * 8.0
             / 1000.0
             / clock.elapsed().as_secs_f64().max(1e-9),
+        keyframes: keyframes.len() as u64,
+        keyframe_bytes: keyframes.iter().map(|f| f.bytes as u64).sum(),
         server: ServerInfo {
             version: welcome.version,
             adapter: welcome.adapter,
@@ -364,11 +373,11 @@ pub async fn replay(
 
 /// frames.csv: one row per frame received.
 pub fn frames_csv(frames: &[FrameRecord]) -> String {
-    let mut s = String::from("frame,connection,seq,sample_t_ms,sent_ms,received_ms,latency_ms,gaze_x,gaze_y,queue_ms,render_ms,readback_ms,encode_ms,sampled,bytes,server_samples\n");
+    let mut s = String::from("frame,connection,seq,sample_t_ms,sent_ms,received_ms,latency_ms,gaze_x,gaze_y,queue_ms,render_ms,readback_ms,encode_ms,sampled,bytes,server_samples,keyframe\n");
     let opt = |v: Option<f64>| v.map(|x| format!("{x:.3}")).unwrap_or_default();
     for f in frames {
         s.push_str(&format!(
-            "{},{},{},{},{},{:.3},{},{:.5},{:.5},{:.3},{:.3},{:.3},{:.3},{:.4},{},{}\n",
+            "{},{},{},{},{},{:.3},{},{:.5},{:.5},{:.3},{:.3},{:.3},{:.3},{:.4},{},{},{}\n",
             f.frame,
             f.connection,
             f.seq.map(|s| s.to_string()).unwrap_or_default(),
@@ -384,7 +393,10 @@ pub fn frames_csv(frames: &[FrameRecord]) -> String {
             f.encode_ms,
             f.sampled,
             f.bytes,
-            f.server_samples
+            f.server_samples,
+            f.keyframe
+                .map(|k| u8::from(k).to_string())
+                .unwrap_or_default()
         ));
     }
     s

@@ -75,6 +75,7 @@ mod tests {
             sampled: 1.0,
             bytes: image.len(),
             server_samples: 0,
+            keyframe: None,
             image: Some(image.to_vec()),
             codec,
             inset_bytes: None,
