@@ -69,6 +69,29 @@ pub struct LoadArgs {
     pub out: PathBuf,
 }
 
+/// One run of the load, its progress on stderr (`cli::progress`).
+fn run_with_progress(
+    runtime: &tokio::runtime::Runtime,
+    opts: &fovea::client::load::LoadOptions,
+) -> fovea::client::load::LoadReport {
+    let total = opts.duration.as_secs_f64();
+    // `run` wants a shareable callback; the line is touched once a second.
+    let line = std::sync::Arc::new(std::sync::Mutex::new(super::progress::Progress::new()));
+    let shown = line.clone();
+    let report = runtime.block_on(fovea::client::load::run(opts, move |sessions, t| {
+        if let Ok(mut line) = shown.lock() {
+            line.show(
+                format_args!("{sessions} sessions: {t:.0}/{total:.0} s"),
+                t >= total,
+            );
+        }
+    }));
+    if let Ok(mut line) = line.lock() {
+        line.finish();
+    }
+    report
+}
+
 pub fn load(a: LoadArgs) -> Result<()> {
     let url = url_is_allowed(&a.url, &a.allow_host)?;
     let recording = match &a.recording {
@@ -120,19 +143,7 @@ pub fn load(a: LoadArgs) -> Result<()> {
             recording: recording.clone(),
             codecs: a.mix_codecs.clone(),
         };
-        let total = duration.as_secs_f64();
-        // `run` wants a shareable callback; the line is touched once a second.
-        let line = std::sync::Arc::new(std::sync::Mutex::new(super::progress::Progress::new()));
-        let shown = line.clone();
-        let report = runtime.block_on(fovea::client::load::run(&opts, move |sessions, t| {
-            if let Ok(mut line) = shown.lock() {
-                let text = format_args!("{sessions} sessions: {t:.0}/{total:.0} s");
-                line.show(text, t >= total);
-            }
-        }));
-        if let Ok(mut line) = line.lock() {
-            line.finish();
-        }
+        let report = run_with_progress(&runtime, &opts);
         println!(
             "{} sessions: {} frames, {:.2} fps total, {:.2}–{:.2} fps per session (fairness {:.2}), gaze→frame p50 {:.1} p95 {:.1} p99 {:.1} max {:.1} ms; render p50 {:.1} ms; samples coalesced {}; errors {}, refused {}, failed {}",
             n,
