@@ -240,7 +240,11 @@ fn plot(file: &std::path::Path) -> Result<()> {
         std::fs::read_to_string(file).with_context(|| format!("reading {}", file.display()))?;
     let json: serde_json::Value =
         serde_json::from_str(&text).with_context(|| format!("parsing {}", file.display()))?;
-    let dir = file.parent().unwrap_or(std::path::Path::new("."));
+    // A bare "load.json" has the empty path as its parent, which printed as "/load.svg".
+    let dir = file
+        .parent()
+        .filter(|d| !d.as_os_str().is_empty())
+        .unwrap_or(std::path::Path::new("."));
     if json.get("runs").is_some() {
         cli::load::plot_load(&json, dir)?;
         eprintln!("wrote {}/load.svg, load.png and load-N.*", dir.display());

@@ -1,12 +1,13 @@
 //! The load plots: gaze-to-frame latency percentiles and frames per second per session against
 //! the number of sessions (one point per run of a sweep), and one run's frame rate over time.
 
+use plotters::coord::ranged1d::{DefaultFormatting, KeyPointHint};
 use plotters::coord::types::RangedCoordf64;
 use plotters::coord::Shift;
 use plotters::prelude::*;
 use serde::Deserialize;
 
-use super::{colour, err, legend, padded, Plot};
+use super::{colour, err, legend, linear_tick, padded, Plot};
 
 /// One run of `fovea load`, as its report (and `load.json`) records it.
 #[derive(Debug, Clone, PartialEq, Deserialize)]
@@ -69,23 +70,23 @@ impl Plot for SweepPlot {
             )
             .map_err(err)?;
         let (left, right) = root.split_horizontally(550);
-        let smax = self.runs.iter().map(|r| r.sessions).max().unwrap_or(1) as f64;
-        let x = 0.5..(smax + 0.5);
+        let x = SessionAxis::new(&self.runs);
         let lmax = self
             .runs
             .iter()
             .map(|r| r.latency_ms.p99)
             .filter(|v| v.is_finite())
             .fold(1.0, f64::max);
+        let y = value_axis(lmax);
         let mut chart = ChartBuilder::on(&left)
             .margin(14)
             .x_label_area_size(44)
             .y_label_area_size(64)
             .caption("gaze → frame latency", ("sans-serif", 15))
-            .build_cartesian_2d(x.clone(), padded(0.0, lmax, false))
+            .build_cartesian_2d(x.clone(), y.clone())
             .map_err(err)?;
         mesh(&mut chart, "ms")?;
-        let series: [(&str, fn(&Run) -> f64); 3] = [
+        let series: [Series; 3] = [
             ("p50", |r| r.latency_ms.p50),
             ("p95", |r| r.latency_ms.p95),
             ("p99", |r| r.latency_ms.p99),
@@ -95,15 +96,16 @@ impl Plot for SweepPlot {
         }
         legend(&mut chart, SeriesLabelPosition::UpperLeft)?;
         let fmax = self.runs.iter().map(|r| r.fps_max).fold(1.0, f64::max);
+        let y = value_axis(fmax);
         let mut chart = ChartBuilder::on(&right)
             .margin(14)
             .x_label_area_size(44)
             .y_label_area_size(64)
             .caption("frames per second, per session", ("sans-serif", 15))
-            .build_cartesian_2d(x, padded(0.0, fmax, false))
+            .build_cartesian_2d(x.clone(), y.clone())
             .map_err(err)?;
         mesh(&mut chart, "frames per second")?;
-        let series: [(&str, fn(&Run) -> f64); 3] = [
+        let series: [Series; 3] = [
             ("slowest session", |r| r.fps_min),
             ("mean", Run::mean_fps),
             ("fastest session", |r| r.fps_max),
@@ -116,18 +118,69 @@ impl Plot for SweepPlot {
     }
 }
 
-type Chart<'a, DB> = ChartContext<'a, DB, Cartesian2d<RangedCoordf64, RangedCoordf64>>;
+/// The sessions axis: ticks at the counts that were run (1, 2, 4, 8 rather than every integer
+/// up to 8) and half a session either side, so a single run sits in the middle with one tick
+/// under it instead of between unlabelled fractions of a session. (plotters' own key-point
+/// wrapper drops the label formatting an f64 axis needs, hence this small axis of our own.)
+#[derive(Clone)]
+struct SessionAxis {
+    linear: RangedCoordf64,
+    ticks: Vec<f64>,
+}
+
+impl SessionAxis {
+    fn new(runs: &[Run]) -> Self {
+        let mut ticks: Vec<f64> = runs.iter().map(|r| r.sessions as f64).collect();
+        ticks.sort_by(f64::total_cmp);
+        ticks.dedup();
+        let (lo, hi) = match (ticks.first(), ticks.last()) {
+            (Some(lo), Some(hi)) => (*lo, *hi),
+            _ => (1.0, 1.0),
+        };
+        let linear = ((lo - 0.5)..(hi + 0.5)).into();
+        SessionAxis { linear, ticks }
+    }
+}
+
+impl Ranged for SessionAxis {
+    type ValueType = f64;
+    type FormatOption = DefaultFormatting;
+
+    fn range(&self) -> std::ops::Range<f64> {
+        self.linear.range()
+    }
+
+    fn map(&self, value: &f64, limit: (i32, i32)) -> i32 {
+        self.linear.map(value, limit)
+    }
+
+    fn key_points<Hint: KeyPointHint>(&self, _hint: Hint) -> Vec<f64> {
+        self.ticks.clone()
+    }
+}
+
+/// A value axis from zero with the top third left free: the legends sit up there, and every
+/// point of a run (the fastest session's, say) would otherwise be able to hide behind one.
+fn value_axis(max: f64) -> std::ops::Range<f64> {
+    let r = padded(0.0, max, false);
+    r.start..(r.start + (r.end - r.start) * 1.3)
+}
+
+/// A line of the sweep plot: its legend text and what it reads from each run.
+type Series = (&'static str, fn(&Run) -> f64);
+
+type Chart<'a, DB> = ChartContext<'a, DB, Cartesian2d<SessionAxis, RangedCoordf64>>;
 
 fn mesh<'a, DB: DrawingBackend + 'a>(chart: &mut Chart<'a, DB>, y: &str) -> Result<(), String> {
     chart
         .configure_mesh()
         .light_line_style(WHITE.mix(0.0))
-        .y_label_formatter(&|v| format!("{v:.0}"))
+        .y_label_formatter(&|v| linear_tick(*v))
         .x_desc("sessions")
         .y_desc(y)
         .axis_desc_style(("sans-serif", 14))
         .label_style(("sans-serif", 12))
-        .x_label_formatter(&|v| format!("{v:.0}"))
+        .x_label_formatter(&|v| linear_tick(*v))
         .draw()
         .map_err(err)
 }
@@ -198,6 +251,8 @@ impl Plot for TimelinePlot {
         chart
             .configure_mesh()
             .light_line_style(WHITE.mix(0.0))
+            .x_label_formatter(&|v| linear_tick(*v))
+            .y_label_formatter(&|v| linear_tick(*v))
             .x_desc("seconds into the run")
             .y_desc("frames per second, all sessions")
             .axis_desc_style(("sans-serif", 14))
@@ -270,6 +325,46 @@ mod tests {
         // Not blank: the lines and labels put dark pixels on the white background.
         let dark = png.to_luma8().pixels().filter(|p| p.0[0] < 100).count();
         assert!(dark > 2000, "{dark} dark pixels");
+    }
+
+    #[test]
+    fn the_sessions_axis_ticks_the_counts_run_and_centres_a_single_run() {
+        let one = SessionAxis::new(&[run(2, 100.0)]);
+        assert_eq!((one.range(), one.key_points(10)), (1.5..2.5, vec![2.0]));
+        let sweep = SessionAxis::new(&[run(4, 1.0), run(1, 1.0), run(8, 1.0), run(2, 1.0)]);
+        assert_eq!(sweep.range(), 0.5..8.5);
+        assert_eq!(sweep.key_points(10), vec![1.0, 2.0, 4.0, 8.0]);
+        assert_eq!(SessionAxis::new(&[]).key_points(10), Vec::<f64>::new());
+    }
+
+    #[test]
+    fn the_top_of_a_value_axis_is_left_to_the_legend() {
+        // The 3 fps of a software-adapter run hid behind the "fastest session" legend.
+        for max in [0.3, 3.0, 3.025, 47.0, 1740.0] {
+            let y = value_axis(max);
+            let height = (max - y.start) / (y.end - y.start);
+            assert!(
+                y.start <= 0.0 && (0.6..=0.75).contains(&height),
+                "{max}: {y:?}"
+            );
+        }
+    }
+
+    #[test]
+    fn ticks_carry_the_decimals_they_need_and_no_more() {
+        let cases = [
+            (0.0, "0"),
+            (3.0, "3"),
+            (1500.0, "1500"),
+            (2.5, "2.5"),
+            (0.25, "0.25"),
+            (0.1 + 0.2, "0.3"),
+            (-1.0, "-1"),
+            (1.0 / 3.0, "0.33"),
+        ];
+        for (v, text) in cases {
+            assert_eq!(linear_tick(v), text, "{v}");
+        }
     }
 
     #[test]

@@ -102,6 +102,19 @@ where
         .map_err(err)
 }
 
+/// A linear axis's tick as text, with as few decimals as it needs (up to two): "3", "2.5",
+/// "0.25". One precision for the whole axis printed "2 2 2 3" on a span of a few units, or
+/// "1.0 2.0" where whole numbers were the ticks.
+fn linear_tick(v: f64) -> String {
+    (0..2)
+        .map(|d| format!("{v:.d$}"))
+        .find(|s| {
+            s.parse::<f64>()
+                .is_ok_and(|p| (p - v).abs() <= 1e-9 * v.abs().max(1.0))
+        })
+        .unwrap_or_else(|| format!("{v:.2}"))
+}
+
 /// A range with a little room on both sides (and never empty).
 fn padded(lo: f64, hi: f64, log: bool) -> std::ops::Range<f64> {
     if log {
