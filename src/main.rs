@@ -129,7 +129,8 @@ enum Command {
     /// Load-test a server: N concurrent sessions driven by the synthetic eye for a fixed time,
     /// acknowledging frames like real clients. Reports gaze-to-frame latency and the server's
     /// stage times as HDR percentiles, fps per session and in total, fairness, errors and
-    /// refusals; writes DIR/load.json and DIR/load.svg. Loopback targets only.
+    /// refusals; writes DIR/load.json and its plots (load.svg/.png, and load-N.* per session
+    /// count). Loopback targets unless --allow-host names the host.
     Load(LoadArgs),
     /// Solve a scene's radiosity in the foreground and report its convergence (elements,
     /// shots, time to 90% and 99% of the converged energy), then the frame time with the cached

@@ -335,13 +335,16 @@ fn load_against_a_closed_port_fails_and_says_why() {
     let out_dir = std::env::temp_dir().join(format!("fovea-load-closed-{}", std::process::id()));
     let out = std::process::Command::new(env!("CARGO_BIN_EXE_fovea"))
         .args(["load", "--url", &format!("ws://127.0.0.1:{port}/ws")])
-        .args(["--sessions", "2", "--duration", "1", "--out"])
+        .args(["--sweep", "1,2", "--duration", "1", "--out"])
         .arg(&out_dir)
         .output()
         .unwrap();
     let stderr = String::from_utf8_lossy(&out.stderr);
     assert!(!out.status.success(), "exit status {}", out.status);
-    assert!(stderr.contains("no session connected"), "{stderr}");
+    assert!(stderr.contains("cannot connect"), "{stderr}");
+    // Nothing was measured: no lines of zeros, no report or plots of them, no second count.
+    assert_eq!(String::from_utf8_lossy(&out.stdout), "");
+    assert!(!out_dir.join("load.json").exists());
     assert!(
         stderr.contains("fovea serve"),
         "the message names the likely fix: {stderr}"

@@ -78,10 +78,10 @@ fn run_with_progress(
     // `run` wants a shareable callback; the line is touched once a second.
     let line = std::sync::Arc::new(std::sync::Mutex::new(super::progress::Progress::new()));
     let shown = line.clone();
-    let report = runtime.block_on(fovea::client::load::run(opts, move |sessions, t| {
+    let report = runtime.block_on(fovea::client::load::run(opts, move |n, t| {
         if let Ok(mut line) = shown.lock() {
             line.show(
-                format_args!("{sessions} sessions: {t:.0}/{total:.0} s"),
+                format_args!("{}: {t:.0}/{total:.0} s", sessions(n)),
                 t >= total,
             );
         }
@@ -90,6 +90,55 @@ fn run_with_progress(
         line.finish();
     }
     report
+}
+
+/// "1 session", "4 sessions".
+fn sessions(n: usize) -> String {
+    format!("{n} session{}", if n == 1 { "" } else { "s" })
+}
+
+/// One run's summary lines on stdout.
+fn print_run(n: usize, report: &fovea::client::load::LoadReport) {
+    println!(
+        "{}: {} frames, {:.2} fps total, {:.2}–{:.2} fps per session (fairness {:.2}), gaze→frame p50 {:.1} p95 {:.1} p99 {:.1} max {:.1} ms; render p50 {:.1} ms; samples coalesced {}; errors {}, refused {}, failed {}",
+        sessions(n),
+        report.frames,
+        report.fps_total,
+        report.fps_min,
+        report.fps_max,
+        report.fairness,
+        report.latency_ms.p50,
+        report.latency_ms.p95,
+        report.latency_ms.p99,
+        report.latency_ms.max,
+        report.stages_ms.get("render").map(|p| p.p50).unwrap_or(f64::NAN),
+        report.samples_coalesced,
+        report.errors,
+        report.refused,
+        report.connection_failures
+    );
+    if report.by_codec.len() > 1 {
+        for (codec, c) in &report.by_codec {
+            println!(
+                "  {codec}: {}, {} frames, gaze→frame p50 {:.1} p95 {:.1} ms; render p50 {:.1} ms; encode p50 {:.2} ms; {:.0} kbit/s per session",
+                sessions(c.sessions), c.frames, c.latency_ms.p50, c.latency_ms.p95, c.render_ms.p50, c.encode_ms.p50, c.kbit_s_per_session
+            );
+        }
+    }
+    if report.reconnects > 0 || report.sessions_ended_early > 0 {
+        let gap = report.reconnect_gap_ms.map_or(String::new(), |g| {
+            format!(", gap between frames p50 {:.0} max {:.0} ms", g.p50, g.max)
+        });
+        println!(
+            "  {} reconnects (a server drained or a connection dropped){gap}; {} ended early{}",
+            report.reconnects,
+            sessions(report.sessions_ended_early as usize),
+            report
+                .ended_early_reason
+                .as_ref()
+                .map_or(String::new(), |r| format!(" ({r})"))
+        );
+    }
 }
 
 pub fn load(a: LoadArgs) -> Result<()> {
@@ -144,46 +193,12 @@ pub fn load(a: LoadArgs) -> Result<()> {
             codecs: a.mix_codecs.clone(),
         };
         let report = run_with_progress(&runtime, &opts);
-        println!(
-            "{} sessions: {} frames, {:.2} fps total, {:.2}–{:.2} fps per session (fairness {:.2}), gaze→frame p50 {:.1} p95 {:.1} p99 {:.1} max {:.1} ms; render p50 {:.1} ms; samples coalesced {}; errors {}, refused {}, failed {}",
-            n,
-            report.frames,
-            report.fps_total,
-            report.fps_min,
-            report.fps_max,
-            report.fairness,
-            report.latency_ms.p50,
-            report.latency_ms.p95,
-            report.latency_ms.p99,
-            report.latency_ms.max,
-            report.stages_ms.get("render").map(|p| p.p50).unwrap_or(f64::NAN),
-            report.samples_coalesced,
-            report.errors,
-            report.refused,
-            report.connection_failures
-        );
-        if report.by_codec.len() > 1 {
-            for (codec, c) in &report.by_codec {
-                println!(
-                    "  {codec}: {} sessions, {} frames, gaze→frame p50 {:.1} p95 {:.1} ms; render p50 {:.1} ms; encode p50 {:.2} ms; {:.0} kbit/s per session",
-                    c.sessions, c.frames, c.latency_ms.p50, c.latency_ms.p95, c.render_ms.p50, c.encode_ms.p50, c.kbit_s_per_session
-                );
-            }
+        // Nothing answered: no later count can do better, and plots of zeros would only
+        // bury the reason under them.
+        if let (Some(e), 0) = (&report.connection_error, report.frames) {
+            bail!("cannot connect: {e}; is `fovea serve` running there?");
         }
-        if report.reconnects > 0 || report.sessions_ended_early > 0 {
-            let gap = report.reconnect_gap_ms.map_or(String::new(), |g| {
-                format!(", gap between frames p50 {:.0} max {:.0} ms", g.p50, g.max)
-            });
-            println!(
-                "  {} reconnects (a server drained or a connection dropped){gap}; {} sessions ended early{}",
-                report.reconnects,
-                report.sessions_ended_early,
-                report
-                    .ended_early_reason
-                    .as_ref()
-                    .map_or(String::new(), |r| format!(" ({r})"))
-            );
-        }
+        print_run(n, &report);
         reports.push(report);
     }
     let capacity = reports
@@ -218,8 +233,10 @@ pub fn load(a: LoadArgs) -> Result<()> {
     plot_load(&json, &a.out)?;
     match capacity {
         Some(c) => println!(
-            "capacity within budget (p95 ≤ {} ms, ≥ {} fps per session): {c} sessions",
-            a.budget_ms, a.min_fps
+            "capacity within budget (p95 ≤ {} ms, ≥ {} fps per session): {}",
+            a.budget_ms,
+            a.min_fps,
+            sessions(c)
         ),
         None => println!(
             "no session count met the budget (p95 ≤ {} ms, ≥ {} fps per session)",
@@ -238,11 +255,17 @@ pub fn load(a: LoadArgs) -> Result<()> {
         let why = match (&r.connection_error, r.refused) {
             (Some(e), _) => format!("cannot connect: {e}"),
             (None, n) if n > 0 => {
-                format!("{n} of {} sessions refused: server at capacity", r.sessions)
+                format!(
+                    "{n} of {} refused: server at capacity",
+                    sessions(r.sessions)
+                )
             }
             (None, _) => "every session failed before its welcome".to_string(),
         };
-        bail!("no session connected to {url} with {} sessions ({why}); is `fovea serve` running there?", r.sessions);
+        bail!(
+            "no session connected to {url} with {} ({why})",
+            sessions(r.sessions)
+        );
     }
     Ok(())
 }
@@ -261,7 +284,7 @@ pub fn plot_load(json: &serde_json::Value, dir: &std::path::Path) -> Result<()> 
         json["rate_hz"]
     );
     for run in &runs {
-        let title = format!("fovea load, {} sessions: {what}", run.sessions);
+        let title = format!("fovea load, {}: {what}", sessions(run.sessions));
         let plot = TimelinePlot {
             title,
             run: run.clone(),
