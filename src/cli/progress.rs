@@ -12,6 +12,9 @@ pub struct Progress {
     terminal: bool,
     last: Option<Instant>,
     drawn: bool,
+    /// The last line has been shown: callers that report "done" more than once (replay does,
+    /// as its final frames come in) printed it twice.
+    done: bool,
 }
 
 impl Progress {
@@ -24,6 +27,7 @@ impl Progress {
             terminal,
             last: None,
             drawn: false,
+            done: false,
         }
     }
 
@@ -52,11 +56,12 @@ impl Progress {
         } else {
             LOG_EVERY
         };
-        if !last && self.last.is_some_and(|t| now.duration_since(t) < every) {
+        if self.done || (!last && self.last.is_some_and(|t| now.duration_since(t) < every)) {
             return None;
         }
         self.last = Some(now);
         self.drawn = true;
+        self.done = last;
         Some(if self.terminal {
             format!("\r{line}")
         } else {
@@ -88,6 +93,11 @@ mod tests {
         assert_eq!(
             log.render(&"40/40 s", true, at(12.0)).as_deref(),
             Some("40/40 s\n")
+        );
+        assert_eq!(
+            log.render(&"40/40 s", true, at(12.1)),
+            None,
+            "done is said once"
         );
         let mut tty = Progress::to(true);
         assert_eq!(tty.render(&"a", false, at(0.0)).as_deref(), Some("\ra"));
