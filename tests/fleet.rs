@@ -52,8 +52,8 @@ fn a_drained_instance_hands_its_sessions_to_the_fleet_and_loses_nothing() {
         &std::fs::read_to_string(out.join("drain/load.json")).expect("drain/load.json"),
     )
     .unwrap();
-    // The file says how the frames were asked for (fleet.sh: the default, JPEG).
-    assert_eq!(load["encoding"]["codec"], "jpeg", "{load}");
+    // The file says how the frames were asked for (fleet.sh: the default, what the page asks for).
+    assert_eq!(load["encoding"]["codec"], "h264", "{load}");
     assert_eq!(
         load["encoding"]["inset_deg"],
         serde_json::Value::Null,

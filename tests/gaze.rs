@@ -324,7 +324,9 @@ async fn ctrl_c_mid_replay_leaves_complete_outputs() {
         .arg("replay")
         .arg(&recording)
         .args(["--screen", "1920x1200", "--url", &url, "--scene", "bunny"])
-        .args(["--size", "96x64", "--preset", "fast", "--out"])
+        .args([
+            "--size", "96x64", "--preset", "fast", "--codec", "jpeg", "--out",
+        ])
         .arg(&out)
         .stdout(std::process::Stdio::null())
         .stderr(std::process::Stdio::piped())

@@ -90,8 +90,9 @@ pub fn number_in(s: &str, lo: f64, hi: f64) -> Result<f64, String> {
 /// How the sessions of `fovea replay` and `fovea load` ask for their frames to be encoded.
 #[derive(clap::Args, Clone)]
 pub struct EncodingArgs {
-    /// Frame codec the sessions ask for: jpeg, png or h264.
-    #[arg(long, value_parser = codec, default_value = "jpeg")]
+    /// Frame codec the sessions ask for: h264, jpeg or png. The default is what the page's
+    /// `auto` picks wherever WebCodecs decodes H.264, so a run measures what viewers get.
+    #[arg(long, value_parser = codec, default_value = "h264")]
     pub codec: fovea::protocol::Codec,
     /// H.264 bitrate, kbit/s (100 to 50000; default: the server's, 4000).
     #[arg(long)]
