@@ -292,8 +292,27 @@ pub fn replay(a: ReplayArgs) -> Result<()> {
             .with_context(|| format!("saving frames in {}", dir.display()))?;
     }
     println!("{}", serde_json::to_string_pretty(&summary)?);
+    // The JSON above is for pipes; people get the gist on one line.
+    eprintln!("{}", gist(&summary));
     eprintln!("wrote {}/frames.csv and summary.json", a.out.display());
     Ok(())
+}
+
+/// A replay's summary on one line for people.
+fn gist(summary: &serde_json::Value) -> String {
+    let f = |k: &str| summary[k].as_f64().unwrap_or(f64::NAN);
+    format!(
+        "{} frames in {:.1} s ({:.1} fps), {} at {:.0} kbit/s (keyframes: {}), gaze→frame p50 {:.1} p95 {:.1} p99 {:.1} ms",
+        summary["frames"],
+        f("seconds"),
+        f("frames") / f("seconds"),
+        summary["server"]["codec"].as_str().unwrap_or("?"),
+        f("kbit_s"),
+        summary["keyframes"],
+        f("latency_p50_ms"),
+        f("latency_p95_ms"),
+        f("latency_p99_ms"),
+    )
 }
 
 pub fn gaze(a: GazeArgs) -> Result<()> {
