@@ -192,6 +192,12 @@ fn main() -> Result<()> {
             distance_cm,
             knobs,
         } => {
+            // A wrong --out is refused before a model is loaded or the GPU opened.
+            let target = match (explain, out) {
+                (true, _) => None,
+                (false, None) => bail!("--out is required"),
+                (false, Some(out)) => Some((image_codec(&out)?, out)),
+            };
             let own = scene_file
                 .or(model)
                 .map(|path| cli::scenes::load_own_scene(&path))
@@ -211,7 +217,9 @@ fn main() -> Result<()> {
                 request.settings = settings.render;
                 return cli::scenes::explain_foveation(request, own, measure);
             }
-            let out = out.context("--out is required")?;
+            let Some((codec, out)) = target else {
+                bail!("--out is required");
+            };
             let limits = fovea::protocol::Limits::default();
             if !(limits.pupil_mm[0]..=limits.pupil_mm[1]).contains(&f64::from(pupil_mm)) {
                 bail!(
@@ -231,7 +239,7 @@ fn main() -> Result<()> {
                 width_cm: display_width_cm,
                 distance_cm,
             };
-            render(request, own, &out, quality, frames)
+            render(request, own, &out, codec, quality, frames)
         }
     }
 }
@@ -275,25 +283,30 @@ fn plot(file: &std::path::Path) -> Result<()> {
     Ok(())
 }
 
-fn render(
-    request: FrameRequest,
-    own: Option<fovea::scene::Scene>,
-    out: &std::path::Path,
-    quality: u8,
-    frames: u32,
-) -> Result<()> {
+/// The image format `fovea render` writes, from the output's extension.
+fn image_codec(out: &std::path::Path) -> Result<Codec> {
     let ext = out
         .extension()
         .and_then(|e| e.to_str())
         .map(str::to_ascii_lowercase);
-    let codec = match ext.as_deref() {
+    Ok(match ext.as_deref() {
         Some("png") => Codec::Png,
         Some("jpg" | "jpeg") => Codec::Jpeg,
         _ => bail!(
             "{}: the output must end in .png, .jpg or .jpeg",
             out.display()
         ),
-    };
+    })
+}
+
+fn render(
+    request: FrameRequest,
+    own: Option<fovea::scene::Scene>,
+    out: &std::path::Path,
+    codec: Codec,
+    quality: u8,
+    frames: u32,
+) -> Result<()> {
     let mut renderer = Renderer::new().context("opening the GPU")?;
     eprintln!("adapter: {}", renderer.adapter());
     if let Some(scene) = own {

@@ -322,6 +322,29 @@ fn explain_runs_on_every_shipped_scene() {
 }
 
 #[test]
+fn an_output_render_cannot_write_is_refused_before_the_model_is_read() {
+    // The model does not exist either: the answer must be about the output, given first.
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_fovea"))
+        .args([
+            "render",
+            "--model",
+            "/nonexistent/huge.glb",
+            "--out",
+            "frame.webp",
+        ])
+        .env("NODEVICE_SELECT", "1")
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success());
+    assert!(
+        stderr.contains("must end in .png, .jpg or .jpeg"),
+        "{stderr}"
+    );
+    assert!(!stderr.contains("huge.glb"), "{stderr}");
+}
+
+#[test]
 fn emissive_gltf_materials_become_area_lights_with_their_strength() {
     let dir = scratch("emissive");
     std::fs::write(dir.join("tri.bin"), triangle_bin(GOOD, [0, 1, 2])).unwrap();
