@@ -180,17 +180,18 @@ fn pupil_rule(
     // Arbitrary units: diameter ∝ value (or ∝ √area); the recording's median maps to the
     // stated diameter.
     let to_diameter = |v: f64| if unit == PupilUnit::Area { v.sqrt() } else { v };
-    let mut d: Vec<f64> = raw.iter().flatten().map(|v| to_diameter(*v)).collect();
-    d.sort_by(|a, b| a.total_cmp(b));
-    let median = d[d.len() / 2];
-    let k = median_mm / median;
+    // The median of the values as recorded (√ keeps the order, so it is also the diameters'
+    // median): squaring √area back printed 1103 as "1102.9999999999998".
+    let mut values: Vec<f64> = raw.iter().flatten().copied().collect();
+    values.sort_by(|a, b| a.total_cmp(b));
+    let median = values[values.len() / 2];
+    let k = median_mm / to_diameter(median);
     for (s, p) in samples.iter_mut().zip(raw) {
         s.pupil_mm = p.map(|v| (k * to_diameter(v)).clamp(1.0, 10.0));
     }
     Some(match unit {
         PupilUnit::Area => format!(
-            "pupil area → diameter: mm = {k:.5}·√area (median area {} ↦ {median_mm} mm), clamped to 1–10 mm",
-            median * median
+            "pupil area → diameter: mm = {k:.5}·√area (median area {median} ↦ {median_mm} mm), clamped to 1–10 mm"
         ),
         _ => format!(
             "pupil diameter in arbitrary units: mm = {k:.5}·value (median {median} ↦ {median_mm} mm), clamped to 1–10 mm"

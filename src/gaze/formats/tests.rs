@@ -199,3 +199,22 @@ fn generic_csv_round_trips() {
     let back = parse(&write_generic(&samples), &ParseOptions::default()).unwrap();
     assert_eq!(back.samples, samples);
 }
+
+#[test]
+fn the_pupil_rule_names_the_median_area_as_recorded() {
+    // √1103 squared back is 1102.9999999999998, which the rule used to print.
+    let raw = [Some(900.0), Some(1103.0), Some(1400.0)];
+    let mut samples = vec![
+        Sample {
+            t_ms: 0.0,
+            xy: None,
+            pupil_mm: None,
+        };
+        3
+    ];
+    let rule = pupil_rule(&mut samples, &raw, PupilUnit::Area, 4.0).unwrap();
+    assert!(rule.contains("(median area 1103 ↦ 4 mm)"), "{rule}");
+    assert!((samples[1].pupil_mm.unwrap() - 4.0).abs() < 1e-12);
+    let smaller = 4.0 * (900.0f64 / 1103.0).sqrt();
+    assert!((samples[0].pupil_mm.unwrap() - smaller).abs() < 1e-12);
+}
