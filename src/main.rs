@@ -193,10 +193,9 @@ fn main() -> Result<()> {
             knobs,
         } => {
             // A wrong --out is refused before a model is loaded or the GPU opened.
-            let target = match (explain, out) {
-                (true, _) => None,
-                (false, None) => bail!("--out is required"),
-                (false, Some(out)) => Some((image_codec(&out)?, out)),
+            let target = match out {
+                Some(out) if !explain => Some((image_codec(&out)?, out)),
+                _ => None,
             };
             let own = scene_file
                 .or(model)
@@ -217,9 +216,7 @@ fn main() -> Result<()> {
                 request.settings = settings.render;
                 return cli::scenes::explain_foveation(request, own, measure);
             }
-            let Some((codec, out)) = target else {
-                bail!("--out is required");
-            };
+            let (codec, out) = target.context("--out is required")?;
             let limits = fovea::protocol::Limits::default();
             if !(limits.pupil_mm[0]..=limits.pupil_mm[1]).contains(&f64::from(pupil_mm)) {
                 bail!(

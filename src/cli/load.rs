@@ -247,20 +247,18 @@ pub fn load(a: LoadArgs) -> Result<()> {
         "wrote {0}/load.json, load.svg/.png and load-N.svg/.png per run",
         a.out.display()
     );
-    // A run in which no session got in measured nothing: say why and fail.
+    // A run in which no session got in measured nothing: say why and fail (one that could not
+    // connect at all stopped the sweep above).
     if let Some(r) = reports
         .iter()
         .find(|r| r.connection_failures + r.refused >= r.sessions as u64)
     {
-        let why = match (&r.connection_error, r.refused) {
-            (Some(e), _) => format!("cannot connect: {e}"),
-            (None, n) if n > 0 => {
-                format!(
-                    "{n} of {} refused: server at capacity",
-                    sessions(r.sessions)
-                )
-            }
-            (None, _) => "every session failed before its welcome".to_string(),
+        let why = match r.refused {
+            0 => "every session failed before its welcome".to_string(),
+            n => format!(
+                "{n} of {} refused: server at capacity",
+                sessions(r.sessions)
+            ),
         };
         bail!(
             "no session connected to {url} with {} ({why})",
