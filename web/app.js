@@ -99,7 +99,7 @@ export function connect() {
   };
   ws.onmessage = (ev) => {
     if (state.ws !== ws) return;
-    if (typeof ev.data === 'string') onText(ev.data); else onFrame(ev.data);
+    if (typeof ev.data === 'string') onText(ev.data); else onFrame(ev.data, ws);
   };
   ws.onclose = (ev) => {
     if (state.ws !== ws) return; // replaced on purpose
@@ -206,7 +206,10 @@ function onText(text) {
   }
 }
 
-async function onFrame(buffer) {
+// `ws`: the socket the frame came on. A JPEG decodes asynchronously; if the page has moved to
+// another session meanwhile, the frame belongs to none: it is not drawn, and not acknowledged,
+// since its number would be a stranger's in the new session (which answers with bad_ack).
+async function onFrame(buffer, ws) {
   const view = new DataView(buffer);
   const headerLen = view.getUint32(0, true);
   const header = JSON.parse(new TextDecoder().decode(new Uint8Array(buffer, 4, headerLen)));
@@ -225,7 +228,11 @@ async function onFrame(buffer) {
       : await createImageBitmap(new Blob([bytes], { type }));
   } catch (e) {
     console.warn(`frame ${header.frame} did not decode`, e);
-    ack(header.frame, true);
+    if (state.ws === ws) ack(header.frame, true);
+    return;
+  }
+  if (state.ws !== ws) {
+    bitmap.close();
     return;
   }
   // An inset frame's bytes stay with it, for the browser test that checks its composition.
@@ -236,16 +243,21 @@ async function onFrame(buffer) {
 // browser tests set `keepPictures` to check the composition against the picture itself).
 async function presentPicture(header, picture) {
   if (!header.inset) return present(header, picture);
+  const ws = state.ws; // as in onFrame: a session left while composing gets nothing of it
   let bitmap, image = null;
   try {
     if (state.keepPictures) image = await createImageBitmap(picture);
     bitmap = composePacked(header, picture);
   } catch (e) {
     console.warn(`frame ${header.frame} did not compose`, e);
-    ack(header.frame, true);
+    if (state.ws === ws) ack(header.frame, true);
     return;
   } finally {
     picture.close();
+  }
+  if (state.ws !== ws) {
+    bitmap.close();
+    return;
   }
   present(header, bitmap, image);
 }

@@ -6,7 +6,8 @@
 use serde_json::Value;
 
 use crate::harness::{
-    change, choose, choose_h264, eval, gaze_and_frame, screenshot, wait_for, Fixture, COLOURS,
+    assert_no_server_errors, change, choose, choose_h264, eval, gaze_and_frame, screenshot,
+    wait_for, Fixture, COLOURS,
 };
 
 /// The mean absolute difference between the canvas and the inset image drawn alone, over the
@@ -90,7 +91,7 @@ async fn an_inset_frame_is_composed_where_the_gaze_was() {
         colours > 50,
         "the composed frame shows the scene ({colours} colours)"
     );
-    assert!(eval(&page, "window.fovea.errors.length").await == 0);
+    assert_no_server_errors(&page).await;
     screenshot(&page, "inset").await;
     drop(page);
     f.finish();
@@ -160,7 +161,7 @@ async fn an_h264_inset_frame_is_one_picture_composed_where_the_gaze_was() {
         colours > 50,
         "the frame shows the scene ({colours} colours)"
     );
-    assert!(eval(&page, "window.fovea.errors.length").await == 0);
+    assert_no_server_errors(&page).await;
     screenshot(&page, "h264-inset").await;
     drop(page);
     f.finish();
@@ -202,7 +203,7 @@ async fn a_foveated_h264_stream_decodes_in_the_page() {
         colours > 50,
         "the decoded frame shows the scene ({colours} colours)"
     );
-    assert!(eval(&page, "window.fovea.errors.length").await == 0);
+    assert_no_server_errors(&page).await;
     screenshot(&page, "h264-lowpass").await;
     drop(page);
     f.finish();
@@ -256,7 +257,7 @@ async fn the_default_codec_is_h264_where_the_browser_decodes_it_and_jpeg_where_n
         "{b}"
     );
     assert_eq!(eval(&page, "window.fovea.lastHeader.codec").await, "jpeg");
-    assert!(eval(&page, "window.fovea.errors.length").await == 0);
+    assert_no_server_errors(&page).await;
     wait_for(&page, STATS_SAY_WHY, 10).await;
     screenshot(&page, "no-webcodecs").await;
     drop(page);
@@ -296,7 +297,7 @@ async fn a_decoder_that_keeps_failing_falls_back_to_jpeg() {
     )
     .await;
     assert_eq!(got, serde_json::json!([3, "jpeg"]));
-    assert!(eval(&page, "window.fovea.errors.length").await == 0);
+    assert_no_server_errors(&page).await;
     drop(page);
     f.finish();
 }

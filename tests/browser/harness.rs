@@ -162,6 +162,12 @@ pub async fn eval(page: &Page, js: &str) -> Value {
         .unwrap_or(Value::Null)
 }
 
+/// The page was sent no error message; on failure, the errors themselves (code and message).
+pub async fn assert_no_server_errors(page: &Page) {
+    let errors = eval(page, "window.fovea.errors").await;
+    assert_eq!(errors, Value::Array(vec![]), "the server refused something");
+}
+
 /// Polls `js` until it is truthy; returns its value.
 pub async fn wait_for(page: &Page, js: &str, seconds: u64) -> Value {
     let deadline = Instant::now() + Duration::from_secs(seconds);

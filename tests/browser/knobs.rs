@@ -1,6 +1,8 @@
 //! The knob panel: a box the page shows reaches the server as a knob it accepts.
 
-use crate::harness::{change, eval, gaze_at, screenshot, wait_for, Fixture, COLOURS};
+use crate::harness::{
+    assert_no_server_errors, change, eval, gaze_at, screenshot, wait_for, Fixture, COLOURS,
+};
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn the_coarse_gather_box_is_sent_and_accepted_on_the_full_preset() {
@@ -27,11 +29,7 @@ async fn the_coarse_gather_box_is_sent_and_accepted_on_the_full_preset() {
     )
     .await;
     assert_eq!(h["trigger"], "settings", "{h}");
-    assert_eq!(
-        eval(&page, "window.fovea.errors.length").await,
-        0,
-        "the server refused nothing"
-    );
+    assert_no_server_errors(&page).await;
     assert!(
         eval(&page, COLOURS).await.as_u64().unwrap() > 50,
         "the canvas shows the scene"
