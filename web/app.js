@@ -40,11 +40,18 @@ const state = {
   errors: [],
   waitingSince: null, // when we asked for a frame that has not come yet
   retry: null,        // { at, attempt, reason } while a reconnect is scheduled
+  saidHello: false,   // this session's hello is out: other messages may follow
+  gazeHeld: false,    // a gaze came before the hello, to send after it
 };
 window.fovea = state;
 
+// Until the session's hello is out (the page may still be asking WebCodecs what it decodes)
+// the server would refuse anything else with no_hello: it is dropped, and a gaze held back is
+// sent right after the hello.
 function send(msg) {
-  if (state.ws && state.ws.readyState === WebSocket.OPEN) state.ws.send(JSON.stringify(msg));
+  if (!state.ws || state.ws.readyState !== WebSocket.OPEN) return;
+  if (msg.type !== 'hello' && !state.saidHello) return;
+  state.ws.send(JSON.stringify(msg));
 }
 
 function ack(frame, dropped) {
@@ -73,6 +80,8 @@ export function connect() {
     old.close(1000, 'reconnecting');
   }
   resetSession();
+  state.saidHello = false;
+  state.gazeHeld = false;
   state.waitingSince = performance.now(); // the first frame is awaited from here
   const [width, height] = controls.size.value.split('x').map(Number);
   // Assigning a canvas's size clears it: only when it changes, so the last frame stays up
@@ -95,7 +104,9 @@ export function connect() {
       type: 'hello', v: 1, scene: controls.scene.value, width, height, preset: controls.preset.value,
       codec, quality: 85, max_in_flight: 2, ...encodingFields(controls.encoding.value),
     });
+    state.saidHello = true;
     sendSettings();
+    if (state.gazeHeld) resendGaze();
   };
   ws.onmessage = (ev) => {
     if (state.ws !== ws) return;
@@ -336,6 +347,7 @@ function expectFrame() {
 let lastGaze = { x: 0.5, y: 0.5 };
 export function sendGaze(x, y, pupil) {
   lastGaze = { x, y };
+  if (state.ws && !state.saidHello) state.gazeHeld = true;
   send({ type: 'gaze', seq: ++state.seq, t_ms: performance.now(), x, y, pupil_mm: pupil ?? Number(controls.pupil.value) });
 }
 

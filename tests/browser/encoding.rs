@@ -301,3 +301,49 @@ async fn a_decoder_that_keeps_failing_falls_back_to_jpeg() {
     drop(page);
     f.finish();
 }
+
+/// The page asks WebCodecs whether it decodes H.264 before it says hello; gaze sent while the
+/// browser thinks (the socket already open) would reach the server before the hello and be
+/// refused with `no_hello`; it is held and sent after the hello. The probe is slowed so that
+/// the mouse moves during it.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn gaze_while_the_codec_is_probed_waits_for_the_hello() {
+    let f = Fixture::start(&[]).await;
+    let page = f
+        .page_after(
+            "const probe = VideoDecoder.isConfigSupported.bind(VideoDecoder); \
+             window.probing = false; \
+             VideoDecoder.isConfigSupported = async (c) => { \
+               window.probing = true; \
+               try { await new Promise((r) => setTimeout(r, 1500)); return await probe(c); } \
+               finally { window.probing = false; } };",
+        )
+        .await;
+    let connects = eval(&page, "window.fovea.connects").await;
+    eval(&page, &change("scene", "e.value = 'opaque'")).await;
+    wait_for(
+        &page,
+        "window.probing && window.fovea.ws.readyState === WebSocket.OPEN",
+        30,
+    )
+    .await;
+    for x in [0.3, 0.5, 0.7] {
+        gaze_only(&page, x).await;
+    }
+    let shown = format!("window.fovea.connects > {connects} && window.fovea.framesShown >= 1");
+    wait_for(&page, &shown, 30).await;
+    assert_eq!(eval(&page, "window.fovea.lastHeader.codec").await, "h264");
+    // The last gaze held back was sent after the hello: a frame answers it.
+    let answered = "(() => { const h = window.fovea.lastHeader; \
+                    return h.trigger === 'gaze' && Math.abs(h.gaze.x - 0.7) < 0.01; })()";
+    wait_for(&page, answered, 30).await;
+    assert_no_server_errors(&page).await;
+    drop(page);
+    f.finish();
+}
+
+/// A mouse move over the canvas at `fx` across, mid-height (the page sends it as gaze).
+async fn gaze_only(page: &chromiumoxide::Page, fx: f64) {
+    let js = format!("(() => {{ const c = document.getElementById('view'); const r = c.getBoundingClientRect(); c.dispatchEvent(new MouseEvent('mousemove', {{clientX: r.x + {fx} * r.width, clientY: r.y + r.height / 2, bubbles: true}})); return true; }})()");
+    eval(page, &js).await;
+}
