@@ -152,23 +152,7 @@ pub fn load(a: LoadArgs) -> Result<()> {
         }
         None => None,
     };
-    let counts: Vec<usize> = match &a.sweep {
-        Some(s) => s
-            .split(',')
-            .map(|n| n.trim().parse::<usize>())
-            .collect::<Result<_, _>>()
-            .context("--sweep: session counts like 1,2,4,8")?,
-        None => vec![a.sessions],
-    };
-    if counts.iter().any(|n| *n == 0 || *n > 256) {
-        bail!("session counts run from 1 to 256");
-    }
-    if let Some(n) = counts.iter().find(|n| **n < a.mix_codecs.len()) {
-        bail!(
-            "--mix-codecs names {} codecs but a run has {n} sessions: every codec needs one",
-            a.mix_codecs.len()
-        );
-    }
+    let counts = session_counts(&a)?;
     let duration = std::time::Duration::from_secs_f64(a.duration.clamp(1.0, 600.0));
     let runtime = tokio::runtime::Runtime::new()?;
     let mut reports = Vec::new();
@@ -211,21 +195,7 @@ pub fn load(a: LoadArgs) -> Result<()> {
         })
         .map(|r| r.sessions)
         .max();
-    let json = serde_json::json!({
-        "url": url,
-        "scene": a.scene, "preset": a.preset, "width": a.size.0, "height": a.size.1, "rate_hz": a.rate_hz,
-        "budget": { "p95_ms": a.budget_ms, "min_fps": a.min_fps },
-        "encoding": {
-            "codec": a.encoding.codec.name(),
-            "mix_codecs": a.mix_codecs.iter().map(|c| c.name()).collect::<Vec<_>>(),
-            "bitrate_kbps": a.encoding.bitrate_kbps,
-            "keyframe_s": a.encoding.keyframe_s,
-            "foveated_encoding": a.encoding.foveated_encoding,
-            "inset_deg": a.encoding.inset_deg,
-        },
-        "capacity_sessions": capacity,
-        "runs": reports,
-    });
+    let json = report_json(&a, &url, capacity, &reports);
     std::fs::write(
         a.out.join("load.json"),
         serde_json::to_string_pretty(&json)?,
@@ -247,8 +217,59 @@ pub fn load(a: LoadArgs) -> Result<()> {
         "wrote {0}/load.json, load.svg/.png and load-N.svg/.png per run",
         a.out.display()
     );
-    // A run in which no session got in measured nothing: say why and fail (one that could not
-    // connect at all stopped the sweep above).
+    nobody_connected(&reports, &url)?;
+    Ok(())
+}
+
+/// The session counts to run (`--sweep`, or `--sessions` alone), within the stated limits.
+fn session_counts(a: &LoadArgs) -> Result<Vec<usize>> {
+    let counts: Vec<usize> = match &a.sweep {
+        Some(s) => s
+            .split(',')
+            .map(|n| n.trim().parse::<usize>())
+            .collect::<Result<_, _>>()
+            .context("--sweep: session counts like 1,2,4,8")?,
+        None => vec![a.sessions],
+    };
+    if counts.iter().any(|n| *n == 0 || *n > 256) {
+        bail!("session counts run from 1 to 256");
+    }
+    if let Some(n) = counts.iter().find(|n| **n < a.mix_codecs.len()) {
+        bail!(
+            "--mix-codecs names {} codecs but a run has {n} sessions: every codec needs one",
+            a.mix_codecs.len()
+        );
+    }
+    Ok(counts)
+}
+
+/// What `load.json` holds: the run's settings, its budget and capacity, and every run's report.
+fn report_json(
+    a: &LoadArgs,
+    url: &str,
+    capacity: Option<usize>,
+    reports: &[fovea::client::load::LoadReport],
+) -> serde_json::Value {
+    serde_json::json!({
+        "url": url,
+        "scene": a.scene, "preset": a.preset, "width": a.size.0, "height": a.size.1, "rate_hz": a.rate_hz,
+        "budget": { "p95_ms": a.budget_ms, "min_fps": a.min_fps },
+        "encoding": {
+            "codec": a.encoding.codec.name(),
+            "mix_codecs": a.mix_codecs.iter().map(|c| c.name()).collect::<Vec<_>>(),
+            "bitrate_kbps": a.encoding.bitrate_kbps,
+            "keyframe_s": a.encoding.keyframe_s,
+            "foveated_encoding": a.encoding.foveated_encoding,
+            "inset_deg": a.encoding.inset_deg,
+        },
+        "capacity_sessions": capacity,
+        "runs": reports,
+    })
+}
+
+/// A run in which no session got in measured nothing: says why and fails (a server that could
+/// not be reached at all stopped the sweep before).
+fn nobody_connected(reports: &[fovea::client::load::LoadReport], url: &str) -> Result<()> {
     if let Some(r) = reports
         .iter()
         .find(|r| r.connection_failures + r.refused >= r.sessions as u64)
