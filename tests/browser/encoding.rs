@@ -6,8 +6,8 @@
 use serde_json::Value;
 
 use crate::harness::{
-    assert_no_server_errors, change, choose, choose_h264, eval, gaze_and_frame, screenshot,
-    wait_for, Fixture, COLOURS,
+    assert_no_server_errors, change, choose, choose_h264, eval, gaze_and_frame, mouse_at,
+    screenshot, wait_for, Fixture, COLOURS,
 };
 
 /// The mean absolute difference between the canvas and the inset image drawn alone, over the
@@ -328,7 +328,7 @@ async fn gaze_while_the_codec_is_probed_waits_for_the_hello() {
     )
     .await;
     for x in [0.3, 0.5, 0.7] {
-        gaze_only(&page, x).await;
+        mouse_at(&page, x).await;
     }
     let shown = format!("window.fovea.connects > {connects} && window.fovea.framesShown >= 1");
     wait_for(&page, &shown, 30).await;
@@ -340,10 +340,4 @@ async fn gaze_while_the_codec_is_probed_waits_for_the_hello() {
     assert_no_server_errors(&page).await;
     drop(page);
     f.finish();
-}
-
-/// A mouse move over the canvas at `fx` across, mid-height (the page sends it as gaze).
-async fn gaze_only(page: &chromiumoxide::Page, fx: f64) {
-    let js = format!("(() => {{ const c = document.getElementById('view'); const r = c.getBoundingClientRect(); c.dispatchEvent(new MouseEvent('mousemove', {{clientX: r.x + {fx} * r.width, clientY: r.y + r.height / 2, bubbles: true}})); return true; }})()");
-    eval(page, &js).await;
 }

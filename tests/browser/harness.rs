@@ -215,6 +215,13 @@ pub async fn gaze_at(page: &Page, fx: f64, fy: f64) {
     wait_for(page, &js, 30).await;
 }
 
+/// A mouse move over the canvas at `fx` across, mid-height (the page sends it as gaze);
+/// unlike `gaze_at`, it does not wait for a frame.
+pub async fn mouse_at(page: &Page, fx: f64) {
+    let js = format!("(() => {{ const c = document.getElementById('view'); const r = c.getBoundingClientRect(); c.dispatchEvent(new MouseEvent('mousemove', {{clientX: r.x + {fx} * r.width, clientY: r.y + r.height / 2, bubbles: true}})); return true; }})()");
+    eval(page, &js).await;
+}
+
 /// Moves the gaze to (fx, fy) and waits until a frame answering it is drawn on the canvas.
 pub async fn gaze_and_frame(page: &Page, fx: f64, fy: f64) {
     let shown = eval(page, "window.fovea.framesShown").await.as_u64();

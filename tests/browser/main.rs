@@ -11,14 +11,13 @@ mod encoding;
 mod harness;
 mod knobs;
 
-use chromiumoxide::layout::Point;
 use std::time::Duration;
 
 use serde_json::Value;
 
 use harness::{
     artifacts, assert_no_server_errors, change, choose, choose_h264, eval, gaze_and_frame, gaze_at,
-    press, screenshot, wait_for, Fixture, Server, COLOURS, CORNER, MARKER,
+    mouse_at, press, screenshot, wait_for, Fixture, Server, COLOURS, CORNER, MARKER,
 };
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
@@ -161,12 +160,7 @@ async fn a_frame_decoded_after_a_scene_switch_is_not_shown_or_acknowledged() {
         .await;
     choose(&page, "codec", "jpeg", 30).await;
     for (i, scene) in ["opaque", "bunny-marble", "opaque"].into_iter().enumerate() {
-        let b = eval(&page, "(() => { const r = document.getElementById('view').getBoundingClientRect(); return [r.x + r.width * 0.5, r.y + r.height * 0.5]; })()").await;
-        let at: Vec<f64> = serde_json::from_value(b).expect("a point");
-        let x = at[0] + 40.0 * (i as f64 + 1.0);
-        page.move_mouse(Point::new(x, at[1]))
-            .await
-            .expect("mouse moves");
+        mouse_at(&page, 0.6 + 0.1 * i as f64).await;
         wait_for(&page, "window.decoding > 0", 30).await;
         let connects = eval(&page, "window.fovea.connects").await;
         eval(&page, &change("scene", &format!("e.value = '{scene}'"))).await;
