@@ -7,7 +7,7 @@ use serde_json::Value;
 
 use crate::harness::{
     assert_no_server_errors, change, choose, choose_h264, eval, gaze_and_frame, mouse_at,
-    screenshot, wait_for, Fixture, COLOURS,
+    screenshot, slowed, wait_for, Fixture, COLOURS,
 };
 
 /// The mean absolute difference between the canvas and the inset image drawn alone, over the
@@ -310,20 +310,18 @@ async fn a_decoder_that_keeps_failing_falls_back_to_jpeg() {
 async fn gaze_while_the_codec_is_probed_waits_for_the_hello() {
     let f = Fixture::start(&[]).await;
     let page = f
-        .page_after(
-            "const probe = VideoDecoder.isConfigSupported.bind(VideoDecoder); \
-             window.probing = false; \
-             VideoDecoder.isConfigSupported = async (c) => { \
-               window.probing = true; \
-               try { await new Promise((r) => setTimeout(r, 1500)); return await probe(c); } \
-               finally { window.probing = false; } };",
-        )
+        .page_after(&slowed(
+            "VideoDecoder",
+            "isConfigSupported",
+            1500,
+            "probing",
+        ))
         .await;
     let connects = eval(&page, "window.fovea.connects").await;
     eval(&page, &change("scene", "e.value = 'opaque'")).await;
     wait_for(
         &page,
-        "window.probing && window.fovea.ws.readyState === WebSocket.OPEN",
+        "window.probing > 0 && window.fovea.ws.readyState === WebSocket.OPEN",
         30,
     )
     .await;

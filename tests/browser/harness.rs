@@ -168,6 +168,18 @@ pub async fn assert_no_server_errors(page: &Page) {
     assert_eq!(errors, Value::Array(vec![]), "the server refused something");
 }
 
+/// A script for `Fixture::page_after` that delays every call of the async browser function
+/// `owner.name` by `ms` and counts the calls under way in `window.<counter>`, so that a test
+/// can act while one is in flight.
+pub fn slowed(owner: &str, name: &str, ms: u32, counter: &str) -> String {
+    format!(
+        "(() => {{ const o = {owner}; const real = o.{name}.bind(o); window.{counter} = 0; \
+         o.{name} = async (...a) => {{ window.{counter} += 1; \
+           try {{ await new Promise((r) => setTimeout(r, {ms})); return await real(...a); }} \
+           finally {{ window.{counter} -= 1; }} }}; }})();"
+    )
+}
+
 /// Polls `js` until it is truthy; returns its value.
 pub async fn wait_for(page: &Page, js: &str, seconds: u64) -> Value {
     let deadline = Instant::now() + Duration::from_secs(seconds);

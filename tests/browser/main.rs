@@ -17,7 +17,7 @@ use serde_json::Value;
 
 use harness::{
     artifacts, assert_no_server_errors, change, choose, choose_h264, eval, gaze_and_frame, gaze_at,
-    mouse_at, press, screenshot, wait_for, Fixture, Server, COLOURS, CORNER, MARKER,
+    mouse_at, press, screenshot, slowed, wait_for, Fixture, Server, COLOURS, CORNER, MARKER,
 };
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
@@ -150,13 +150,7 @@ async fn switching_scene_size_and_codec_keeps_showing_frames() {
 async fn a_frame_decoded_after_a_scene_switch_is_not_shown_or_acknowledged() {
     let f = Fixture::start(&[]).await;
     let page = f
-        .page_after(
-            "const decode = window.createImageBitmap.bind(window); window.decoding = 0; \
-             window.createImageBitmap = async (...a) => { \
-               window.decoding += 1; \
-               try { await new Promise((r) => setTimeout(r, 500)); return await decode(...a); } \
-               finally { window.decoding -= 1; } };",
-        )
+        .page_after(&slowed("window", "createImageBitmap", 500, "decoding"))
         .await;
     choose(&page, "codec", "jpeg", 30).await;
     for (i, scene) in ["opaque", "bunny-marble", "opaque"].into_iter().enumerate() {
